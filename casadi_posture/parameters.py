@@ -1,0 +1,77 @@
+"""Parameter records with units, source and status, and the loader of the shipped data files.
+
+A data file is TOML. A table holding a ``value`` key is one parameter; its
+``unit`` is required. ``source``, ``status`` and ``evidence`` are inherited
+from the nearest enclosing table that sets them, so a file states its source
+once. ``status`` is ``verified`` (read in a primary text or two independent
+transcriptions, or checked numerically) or ``estimate`` (our modelling
+choice or a single unchecked transcription); ``evidence`` keeps the finer tag
+of ``shared/reference/biomech-data.md`` ([P], [C1], [C2], [X], [E], [U]).
+Values the user overrides in a problem file get status ``user``.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, replace
+from functools import cache
+from importlib import resources
+from typing import Any, Literal
+
+Status = Literal["verified", "estimate", "user"]
+_INHERITED = ("source", "status", "evidence")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One number (or list of numbers) the model uses, with where it comes from."""
+
+    name: str
+    value: Any
+    unit: str
+    source: str
+    status: Status
+    evidence: str = ""
+
+    def overridden(self, value: Any, where: str) -> Parameter:
+        """The same parameter with a user value from ``where`` (a file and key)."""
+        return replace(self, value=value, source=where, status="user", evidence="")
+
+
+@cache
+def load(stem: str) -> dict[str, Parameter]:
+    """The parameters of ``casadi_posture/data/<stem>.toml``, by dotted name."""
+    text = resources.files("casadi_posture.data").joinpath(f"{stem}.toml").read_text("utf-8")
+    table = tomllib.loads(text)
+    out: dict[str, Parameter] = {}
+    _collect(table, stem, {}, out)
+    return out
+
+
+def _collect(
+    table: dict[str, Any], prefix: str, inherited: dict[str, str], out: dict[str, Parameter]
+) -> None:
+    context = {**inherited, **{k: table[k] for k in _INHERITED if k in table}}
+    if "value" in table:
+        missing = [k for k in ("unit", "source", "status") if k not in table and k not in context]
+        if missing:
+            raise ValueError(f"data parameter {prefix} lacks {', '.join(missing)}")
+        if context["status"] not in ("verified", "estimate"):
+            raise ValueError(f"data parameter {prefix} has status {context['status']!r}")
+        out[prefix] = Parameter(
+            name=prefix,
+            value=table["value"],
+            unit=table["unit"],
+            source=context["source"],
+            status=context["status"],
+            evidence=context.get("evidence", ""),
+        )
+        return
+    for key, item in table.items():
+        if isinstance(item, dict):
+            _collect(item, f"{prefix}.{key}", context, out)
+
+
+def value(stem: str, name: str) -> Any:
+    """The value of parameter ``<stem>.<name>``."""
+    return load(stem)[f"{stem}.{name}"].value
