@@ -1,0 +1,163 @@
+"""Endurance models: the maximum time a constant static load can be held, selectable by name.
+
+A load is the normalized torque ``T_N`` of a half-joint in %MVC (SPEC §2); ``f = T_N/100`` is
+the same load as a fraction of MVC. Loads above 100 %MVC are not clipped: every model
+extrapolates its own curve there (see each class). Coefficients live in
+``data/endurance.toml`` (biomech-data §4.1-4.3).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+from numpy.polynomial import polynomial
+from numpy.typing import ArrayLike
+
+from casadi_posture import parameters
+from casadi_posture.errors import ProblemError
+from casadi_posture.parameters import Parameter
+
+SECONDS_PER_MINUTE = 60.0
+PERCENT = 100.0
+DEFAULT_ENDURANCE_MODEL = "manenica"
+
+
+class EnduranceModel(Protocol):
+    """Maximum holding time of a constant static load by a muscle group of a joint region."""
+
+    name: str
+
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+        """Endurance time [s] of each load [%MVC] held by a muscle group of ``region``."""
+        ...
+
+    def parameters(self, regions: Iterable[str]) -> list[Parameter]:
+        """The parameter records the model uses for these joint regions."""
+        ...
+
+
+def _data(name: str) -> Parameter:
+    return parameters.load("endurance")[f"endurance.{name}"]
+
+
+@dataclass(frozen=True)
+class Manenica:
+    """Manenica 1986 (paper eq. 6): ``mht = exp(a − b·T_N)`` [min], ``T_N`` in %MVC.
+
+    Region-independent and a pure exponential: finite at 0 %MVC (``exp(a)`` = 14.88 min),
+    10 s at 100 %MVC, and shorter still above it.
+    """
+
+    a: Parameter
+    b: Parameter
+    name: str = field(default="manenica", init=False)
+
+    @classmethod
+    def from_data(cls) -> Manenica:
+        """The model with the shipped coefficients (``endurance.manenica``)."""
+        return cls(a=_data("manenica.a"), b=_data("manenica.b"))
+
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+        """Maximum holding time [s] of each load [%MVC]; ``region`` is ignored."""
+        load = np.asarray(load_pct_mvc, dtype=float)
+        return SECONDS_PER_MINUTE * np.exp(self.a.value - self.b.value * load)
+
+    def parameters(self, regions: Iterable[str]) -> list[Parameter]:
+        """``a`` and ``b``, whatever the regions."""
+        return [self.a, self.b]
+
+
+@dataclass(frozen=True)
+class FreyLawAvin:
+    """Frey-Law & Avin 2010 power model per joint region: ``ET = b0·f^b1`` [s], ``f = T_N/100``.
+
+    Table 2 of the paper (fitted on 10-100 %MVC). ``f ≤ 0`` gives ``inf``; above 100 %MVC the
+    power law goes on (``ET < b0``).
+    """
+
+    coefficients: Mapping[str, tuple[Parameter, Parameter]]
+    name: str = field(default="frey_law_avin", init=False)
+
+    @classmethod
+    def from_data(cls) -> FreyLawAvin:
+        """The model with the shipped table (``endurance.frey_law_avin.<region>.b0/b1``)."""
+        prefix = "endurance.frey_law_avin."
+        regions = dict.fromkeys(
+            name.removeprefix(prefix).split(".")[0]
+            for name in parameters.load("endurance")
+            if name.startswith(prefix)
+        )
+        return cls(
+            {
+                region: (_data(f"frey_law_avin.{region}.b0"), _data(f"frey_law_avin.{region}.b1"))
+                for region in regions
+            }
+        )
+
+    def _coefficients(self, region: str) -> tuple[Parameter, Parameter]:
+        if region not in self.coefficients:
+            known = ", ".join(self.coefficients)
+            raise ProblemError(None, "region", region, f"a joint region of {self.name}: {known}")
+        return self.coefficients[region]
+
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+        """Endurance time [s] of each load [%MVC] for the muscle groups of ``region``."""
+        b0, b1 = self._coefficients(region)
+        fraction = np.asarray(load_pct_mvc, dtype=float) / PERCENT
+        positive = fraction > 0
+        return np.where(positive, b0.value * np.where(positive, fraction, 1.0) ** b1.value, np.inf)
+
+    def parameters(self, regions: Iterable[str]) -> list[Parameter]:
+        """``b0`` and ``b1`` of each distinct region, in order of first appearance."""
+        return [p for region in dict.fromkeys(regions) for p in self._coefficients(region)]
+
+
+@dataclass(frozen=True)
+class Rohmert:
+    """Rohmert 1960 endurance curve: ``ET = c0 + c1/f + c2/f² + c3/f³`` [min], ``f = T_N/100``.
+
+    Valid above the sustainable level (15 %MVC); at or below it the load can be held
+    indefinitely (``inf``). The polynomial turns negative just above 109 %MVC, so loads above
+    100 %MVC keep the 100 %MVC value (0.1 min).
+    """
+
+    coefficients: Parameter
+    sustainable_level: Parameter
+    name: str = field(default="rohmert", init=False)
+
+    @classmethod
+    def from_data(cls) -> Rohmert:
+        """The model with the shipped coefficients (``endurance.rohmert``)."""
+        return cls(
+            coefficients=_data("rohmert.coefficients"),
+            sustainable_level=_data("rohmert.sustainable_level"),
+        )
+
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+        """Endurance time [s] of each load [%MVC]; ``region`` is ignored."""
+        load = np.asarray(load_pct_mvc, dtype=float)
+        held = load > self.sustainable_level.value
+        inverse = PERCENT / np.clip(load, self.sustainable_level.value, PERCENT)
+        minutes = polynomial.polyval(inverse, self.coefficients.value)
+        return np.where(held, SECONDS_PER_MINUTE * minutes, np.inf)
+
+    def parameters(self, regions: Iterable[str]) -> list[Parameter]:
+        """The coefficients and the sustainable level, whatever the regions."""
+        return [self.coefficients, self.sustainable_level]
+
+
+ENDURANCE_MODELS: dict[str, Callable[[], EnduranceModel]] = {
+    "manenica": Manenica.from_data,
+    "frey_law_avin": FreyLawAvin.from_data,
+    "rohmert": Rohmert.from_data,
+}
+
+
+def endurance_model(name: str) -> EnduranceModel:
+    """The endurance model called ``name`` (a key of ``ENDURANCE_MODELS``)."""
+    if name not in ENDURANCE_MODELS:
+        raise ProblemError(None, "fatigue.endurance", name, f"one of {', '.join(ENDURANCE_MODELS)}")
+    return ENDURANCE_MODELS[name]()

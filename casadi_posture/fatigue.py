@@ -1,0 +1,364 @@
+"""Fatigue state of each half-joint over time, selectable by name (SPEC §3).
+
+Both models are vectorised over the n half-joints of a body; ``regions[i]`` is the joint
+region (``"shoulder"``, ``"elbow"``, …) of half-joint i, which selects its Frey-Law 2012
+rates. Loads are normalized torques ``T_N`` in %MVC, constant over a step of ``dt_s``
+seconds. A fatigue level of 1.0 means exhausted; the hysteresis compares it with 0.8 / 0.5.
+Parameters live in ``data/fatigue.toml`` (biomech-data §4.4-4.5).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from casadi_posture import parameters
+from casadi_posture.endurance import PERCENT, EnduranceModel
+from casadi_posture.errors import ProblemError
+from casadi_posture.parameters import Parameter
+
+DEFAULT_FATIGUE_MODEL = "holding_time"
+_REGION_TABLE = "fatigue.frey_law_2012."
+
+
+class FatigueModel(Protocol):
+    """Fatigue and recovery of n half-joints under their loads."""
+
+    name: str
+
+    def initial_state(self) -> np.ndarray:
+        """The rested state, shape (n,) or (n, k)."""
+        ...
+
+    def step(self, state: np.ndarray, load_pct_mvc: ArrayLike, dt_s: float) -> np.ndarray:
+        """The state after ``dt_s`` [s] with each half-joint's load [%MVC] held constant."""
+        ...
+
+    def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
+        """Fatigue level per half-joint (1.0 = exhausted) at the current loads [%MVC]."""
+        ...
+
+    def parameters(self) -> list[Parameter]:
+        """The parameter records the model uses (for ``describe``)."""
+        ...
+
+
+def _data(name: str) -> Parameter:
+    return parameters.load("fatigue")[f"fatigue.{name}"]
+
+
+def _with_user_value(parameter: Parameter, value: float | None, argument: str) -> Parameter:
+    if value is None:
+        return parameter
+    return parameter.overridden(float(value), f"argument {argument}")
+
+
+def _region_rates(regions: Sequence[str], rate: str) -> dict[str, Parameter]:
+    """Frey-Law 2012 Table 1 ``rate`` (fatigue_rate / recovery_rate) of each distinct region."""
+    table = parameters.load("fatigue")
+    known = dict.fromkeys(
+        name.removeprefix(_REGION_TABLE).split(".")[0]
+        for name in table
+        if name.startswith(_REGION_TABLE)
+    )
+    for region in regions:
+        if region not in known:
+            expected = f"a joint region of Frey-Law 2012: {', '.join(known)}"
+            raise ProblemError(None, "region", region, expected)
+    return {region: table[f"{_REGION_TABLE}{region}.{rate}"] for region in dict.fromkeys(regions)}
+
+
+def _per_half_joint(regions: Sequence[str], rates: dict[str, Parameter]) -> np.ndarray:
+    return np.array([rates[region].value for region in regions], dtype=float)
+
+
+def _check_time_step(dt_s: float) -> None:
+    if not dt_s >= 0:
+        raise ProblemError(None, "dt_s", dt_s, "a time step ≥ 0 s")
+
+
+def _check_positive(value: float, key: str, expected: str) -> None:
+    if not value > 0:
+        raise ProblemError(None, key, value, expected)
+
+
+class HoldingTimeFatigue:
+    """Paper eq. 7 used incrementally, with the recovery law of biomech-data §4.5 (SPEC §3).
+
+    State: fatigue ``F`` per half-joint, shape (n,), rested at 0; level = ``F``. Over a step of
+    ``dt`` [s] at a constant load ``T_N`` [%MVC]:
+
+    - ``T_N > T_0``: ``F ← F + dt / ET(T_N)``, ``ET`` [s] from the endurance model;
+    - ``T_N ≤ T_0``: ``F ← F·exp(−r·R_j·dt)``, the exact solution of ``dF/dt = −r·R_j·F``, with
+      ``R_j`` [1/s] the Frey-Law 2012 recovery rate of the region and ``r = r_rest`` (15) when
+      the half-joint carries no torque (``T_N = 0``), else 1.
+
+    ``T_0`` (default 15 %MVC) is what stops accumulation at small loads: Manenica's ``ET`` is
+    finite even at 0 %MVC.
+    """
+
+    name = "holding_time"
+
+    def __init__(
+        self,
+        regions: Sequence[str],
+        endurance: EnduranceModel,
+        *,
+        recovery_threshold_pct_mvc: float | None = None,
+    ) -> None:
+        self.regions = tuple(regions)
+        self.endurance = endurance
+        self._endurance_parameters = endurance.parameters(self.regions)
+        self._threshold = _with_user_value(
+            _data("holding_time.recovery_threshold"),
+            recovery_threshold_pct_mvc,
+            "recovery_threshold_pct_mvc",
+        )
+        if not self._threshold.value >= 0:
+            raise ProblemError(
+                None, "recovery_threshold_pct_mvc", self._threshold.value, "a load ≥ 0 %MVC"
+            )
+        self._rest_multiplier = _data("rest_multiplier")
+        self._recovery_rates = _region_rates(self.regions, "recovery_rate")
+        self._recovery_rate = _per_half_joint(self.regions, self._recovery_rates)
+        names = np.array(self.regions, dtype=object)
+        self._half_joints = {
+            region: np.flatnonzero(names == region) for region in dict.fromkeys(self.regions)
+        }
+
+    def initial_state(self) -> np.ndarray:
+        """Zero fatigue for every half-joint, shape (n,)."""
+        return np.zeros(len(self.regions))
+
+    def step(self, state: np.ndarray, load_pct_mvc: ArrayLike, dt_s: float) -> np.ndarray:
+        """Fatigue after ``dt_s`` [s] at constant loads [%MVC]: grows above ``T_0``, else decays."""
+        _check_time_step(dt_s)
+        fatigue = np.asarray(state, dtype=float)
+        load = np.broadcast_to(np.asarray(load_pct_mvc, dtype=float), fatigue.shape)
+        endurance_s = np.empty_like(fatigue)
+        for region, index in self._half_joints.items():
+            endurance_s[index] = self.endurance.endurance_time_s(load[index], region)
+        multiplier = np.where(load == 0, self._rest_multiplier.value, 1.0)
+        recovered = fatigue * np.exp(-multiplier * self._recovery_rate * dt_s)
+        return np.where(load > self._threshold.value, fatigue + dt_s / endurance_s, recovered)
+
+    def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
+        """The fatigue ``F`` itself (``ht/mht`` of paper eq. 7 for a constant load)."""
+        return np.array(state, dtype=float)
+
+    def parameters(self) -> list[Parameter]:
+        """Endurance model, ``T_0``, ``r_rest`` and ``R_j`` of the regions in use."""
+        return [
+            *self._endurance_parameters,
+            self._threshold,
+            self._rest_multiplier,
+            *self._recovery_rates.values(),
+        ]
+
+
+def _three_compartment_rates(
+    state: np.ndarray,
+    target: np.ndarray,
+    fatigue_rate: np.ndarray,
+    recovery_rate: np.ndarray,
+    development_gain: float,
+    relaxation_gain: float,
+) -> np.ndarray:
+    """d(MA, MR, MF)/dt [%/s] of the 3CC (Xia & Frey-Law 2008), ``recovery_rate`` = r·R."""
+    active, resting, fatigued = state[..., 0], state[..., 1], state[..., 2]
+    gap = target - active
+    drive = np.where(
+        active < target,
+        development_gain * np.minimum(gap, resting),
+        relaxation_gain * gap,
+    )
+    recovered = recovery_rate * fatigued
+    exhausted = fatigue_rate * active
+    return np.stack([drive - exhausted, recovered - drive, exhausted - recovered], axis=-1)
+
+
+class ThreeCompartmentFatigue:
+    """Xia & Frey-Law 2008 three-compartment model with the 3CC-r rest multiplier (Looft 2018).
+
+    State per half-joint: (MA, MR, MF) = active, resting, fatigued motor units [% of the pool],
+    shape (n, 3), rested at (0, 100, 0). Target load ``TL = T_N`` clipped to [0, 100] %MVC
+    (biomech-data §4.4)::
+
+        C = L_D·(TL − MA)   if MA < TL and MR > TL − MA
+            L_D·MR          if MA < TL and MR ≤ TL − MA
+            L_R·(TL − MA)   if MA ≥ TL
+        dMA/dt = C − F·MA,   dMR/dt = −C + r·R·MF,   dMF/dt = F·MA − r·R·MF
+
+    ``F``, ``R`` [1/s] of the region (Frey-Law 2012 Table 1), ``L_D = L_R`` = 10 1/s, ``r = r_rest``
+    (15) only while ``TL = 0``, else 1. Explicit Euler: a step ``dt`` is split into
+    ``ceil(dt / max_substep_s)`` equal substeps; ``MA + MR + MF`` stays 100.
+
+    Fatigue level = ``MF / (100 − TL)`` clipped to [0, 1] (1 when ``TL = 100``). Because
+    ``MA + MR = 100 − MF`` it reaches 1 exactly when ``MA + MR = TL``: the 3CC failure point,
+    where the residual capacity no longer covers the target. ``MF/100`` would not do: at
+    failure it equals ``(100 − TL)/100``, below the 0.8 fatigue threshold for any load above
+    20 %MVC, so the hysteresis would never fire.
+    """
+
+    name = "3cc_r"
+
+    def __init__(self, regions: Sequence[str], *, max_substep_s: float | None = None) -> None:
+        self.regions = tuple(regions)
+        self._max_substep = _with_user_value(
+            _data("numerics.max_substep"), max_substep_s, "max_substep_s"
+        )
+        _check_positive(self._max_substep.value, "max_substep_s", "a time step > 0 s")
+        self._horizon = _data("numerics.endurance_horizon")
+        self._development_gain = _data("three_compartment.development_gain")
+        self._relaxation_gain = _data("three_compartment.relaxation_gain")
+        self._rest_multiplier = _data("rest_multiplier")
+        self._fatigue_rates = _region_rates(self.regions, "fatigue_rate")
+        self._recovery_rates = _region_rates(self.regions, "recovery_rate")
+        self._fatigue_rate = _per_half_joint(self.regions, self._fatigue_rates)
+        self._recovery_rate = _per_half_joint(self.regions, self._recovery_rates)
+
+    @property
+    def max_substep_s(self) -> float:
+        """Largest explicit-Euler substep [s]."""
+        return float(self._max_substep.value)
+
+    def initial_state(self) -> np.ndarray:
+        """(MA, MR, MF) = (0, 100, 0) for every half-joint, shape (n, 3)."""
+        state = np.zeros((len(self.regions), 3))
+        state[:, 1] = PERCENT
+        return state
+
+    def _target(self, load_pct_mvc: ArrayLike) -> np.ndarray:
+        return np.clip(np.asarray(load_pct_mvc, dtype=float), 0.0, PERCENT)
+
+    def _recovery(self, target: np.ndarray, recovery_rate: np.ndarray) -> np.ndarray:
+        """``r·R`` [1/s]: R multiplied by ``r_rest`` where the target load is zero."""
+        return recovery_rate * np.where(target == 0, self._rest_multiplier.value, 1.0)
+
+    def _euler(
+        self,
+        state: np.ndarray,
+        target: np.ndarray,
+        fatigue_rate: np.ndarray,
+        recovery_rate: np.ndarray,
+        h: float,
+    ) -> np.ndarray:
+        rates = _three_compartment_rates(
+            state,
+            target,
+            fatigue_rate,
+            recovery_rate,
+            self._development_gain.value,
+            self._relaxation_gain.value,
+        )
+        return state + h * rates
+
+    def step(self, state: np.ndarray, load_pct_mvc: ArrayLike, dt_s: float) -> np.ndarray:
+        """(MA, MR, MF) after ``dt_s`` [s] at constant loads [%MVC], by Euler substeps."""
+        _check_time_step(dt_s)
+        state = np.asarray(state, dtype=float)
+        target = np.broadcast_to(self._target(load_pct_mvc), state.shape[:-1])
+        recovery = self._recovery(target, self._recovery_rate)
+        substeps = math.ceil(dt_s / self.max_substep_s)
+        for _ in range(substeps):
+            state = self._euler(state, target, self._fatigue_rate, recovery, dt_s / substeps)
+        return state
+
+    def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
+        """``MF / (100 − TL)`` clipped to [0, 1]: 1 at the 3CC failure ``MA + MR = TL``."""
+        fatigued = np.asarray(state, dtype=float)[..., 2]
+        capacity = PERCENT - self._target(load_pct_mvc)
+        ratio = np.divide(fatigued, capacity, out=np.ones_like(fatigued), where=capacity > 0)
+        return np.clip(ratio, 0.0, 1.0)
+
+    def endurance_time_s(
+        self,
+        load_pct_mvc: ArrayLike,
+        region: str,
+        *,
+        dt_s: float | None = None,
+        horizon_s: float | None = None,
+    ) -> np.ndarray:
+        """Time [s] from rest to the 3CC failure (``MA + MR < TL``) under each constant load [%MVC].
+
+        Explicit Euler with step ``dt_s`` (default ``max_substep_s``), first step count at
+        which the failure holds. ``inf`` if it does not happen within ``horizon_s`` (default
+        ``fatigue.numerics.endurance_horizon``), and at once for loads at or below the
+        sustainable level ``100·R/(R + F)``, where ``MF ≤ F·TL/R ≤ 100 − TL`` for ever.
+        """
+        dt = self.max_substep_s if dt_s is None else dt_s
+        horizon = self._horizon.value if horizon_s is None else horizon_s
+        _check_positive(dt, "dt_s", "a time step > 0 s")
+        fatigue_rate = _region_rates([region], "fatigue_rate")[region].value
+        recovery_rate = _region_rates([region], "recovery_rate")[region].value
+        load = np.asarray(load_pct_mvc, dtype=float)
+        target = self._target(load).ravel()
+        times = np.full(target.shape, np.inf)
+        running = target > PERCENT * recovery_rate / (recovery_rate + fatigue_rate)
+        state = np.tile([0.0, PERCENT, 0.0], (target.size, 1))
+        fatigue = np.full(target.shape, fatigue_rate)
+        recovery = self._recovery(target, np.full(target.shape, recovery_rate))
+        steps = 0
+        while running.any() and (steps + 1) * dt <= horizon:
+            state = self._euler(state, target, fatigue, recovery, dt)
+            steps += 1
+            failed = running & (state[:, 0] + state[:, 1] < target)
+            times[failed] = steps * dt
+            running &= ~failed
+        return times.reshape(load.shape)
+
+    def parameters(self) -> list[Parameter]:
+        """Gains, ``r_rest``, ``F`` and ``R`` of the regions in use, and the Euler substep."""
+        return [
+            self._development_gain,
+            self._relaxation_gain,
+            self._rest_multiplier,
+            *self._fatigue_rates.values(),
+            *self._recovery_rates.values(),
+            self._max_substep,
+        ]
+
+
+def _holding_time(
+    regions: Sequence[str], endurance: EnduranceModel, recovery_threshold_pct_mvc: float | None
+) -> FatigueModel:
+    return HoldingTimeFatigue(
+        regions, endurance, recovery_threshold_pct_mvc=recovery_threshold_pct_mvc
+    )
+
+
+def _three_compartment(
+    regions: Sequence[str], endurance: EnduranceModel, recovery_threshold_pct_mvc: float | None
+) -> FatigueModel:
+    if recovery_threshold_pct_mvc is not None:
+        expected = "no recovery threshold with the 3cc_r model (its recovery is built in)"
+        raise ProblemError(None, "recovery_threshold_pct_mvc", recovery_threshold_pct_mvc, expected)
+    return ThreeCompartmentFatigue(regions)
+
+
+FATIGUE_MODELS: dict[str, Callable[[Sequence[str], EnduranceModel, float | None], FatigueModel]] = {
+    "holding_time": _holding_time,
+    "3cc_r": _three_compartment,
+}
+
+
+def fatigue_model(
+    name: str,
+    *,
+    regions: Sequence[str],
+    endurance: EnduranceModel,
+    recovery_threshold_pct_mvc: float | None = None,
+) -> FatigueModel:
+    """The fatigue model called ``name`` (a key of ``FATIGUE_MODELS``) for these half-joints.
+
+    ``regions[i]`` is the joint region of half-joint i. ``endurance`` drives ``holding_time``;
+    ``3cc_r`` has its own endurance (``ThreeCompartmentFatigue.endurance_time_s``) and ignores
+    it. ``recovery_threshold_pct_mvc`` overrides ``T_0`` of ``holding_time`` [%MVC].
+    """
+    if name not in FATIGUE_MODELS:
+        raise ProblemError(None, "fatigue.model", name, f"one of {', '.join(FATIGUE_MODELS)}")
+    return FATIGUE_MODELS[name](regions, endurance, recovery_threshold_pct_mvc)

@@ -1,0 +1,115 @@
+"""Endurance models against hand calculations and the biomech-data §4.1-4.3 examples."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from casadi_posture.endurance import (
+    ENDURANCE_MODELS,
+    FreyLawAvin,
+    Manenica,
+    Rohmert,
+    endurance_model,
+)
+from casadi_posture.errors import ProblemError
+
+
+@pytest.mark.parametrize(
+    ("load", "minutes"),
+    [(0.0, 14.880), (15.0, 7.599), (50.0, 1.584), (100.0, 0.16864)],
+)
+def test_manenica_matches_hand_calculation(load: float, minutes: float) -> None:
+    model = endurance_model("manenica")
+    assert model.endurance_time_s(load, "shoulder") == pytest.approx(60 * minutes, rel=3e-4)
+
+
+def test_manenica_is_vectorised_and_region_independent() -> None:
+    model = endurance_model("manenica")
+    loads = np.array([[0.0, 15.0], [50.0, 100.0]])
+    shoulder = model.endurance_time_s(loads, "shoulder")
+    assert shoulder.shape == (2, 2)
+    np.testing.assert_array_equal(shoulder, model.endurance_time_s(loads, "ankle"))
+
+
+def test_manenica_extrapolates_above_mvc() -> None:
+    model = endurance_model("manenica")
+    above = model.endurance_time_s([100.0, 150.0], "elbow")
+    assert 0 < above[1] < above[0]
+
+
+@pytest.mark.parametrize(("region", "seconds"), [("shoulder", 283.0), ("elbow", 630.0)])
+def test_frey_law_avin_matches_paper_example(region: str, seconds: float) -> None:
+    model = endurance_model("frey_law_avin")
+    assert model.endurance_time_s(20.0, region) == pytest.approx(seconds, rel=0.01)
+
+
+def test_frey_law_avin_orders_fatigue_resistance_as_the_abstract() -> None:
+    model = endurance_model("frey_law_avin")
+    regions = ["ankle", "trunk", "hand", "elbow", "knee", "shoulder"]
+    times = [float(model.endurance_time_s(40.0, region)) for region in regions]
+    assert times == sorted(times, reverse=True)
+
+
+def test_frey_law_avin_is_infinite_without_load() -> None:
+    model = endurance_model("frey_law_avin")
+    times = model.endurance_time_s([0.0, -5.0, 10.0], "knee")
+    assert np.isinf(times[:2]).all()
+    assert np.isfinite(times[2])
+
+
+def test_frey_law_avin_unknown_region_names_known_ones() -> None:
+    model = endurance_model("frey_law_avin")
+    with pytest.raises(ProblemError, match=r"'hip'.*shoulder"):
+        model.endurance_time_s(30.0, "hip")
+    with pytest.raises(ProblemError, match="'neck'"):
+        model.parameters(["shoulder", "neck"])
+
+
+@pytest.mark.parametrize(("load", "minutes"), [(20.0, 6.5), (50.0, 1.1), (100.0, 0.1)])
+def test_rohmert_matches_its_curve(load: float, minutes: float) -> None:
+    model = endurance_model("rohmert")
+    assert model.endurance_time_s(load, "elbow") == pytest.approx(60 * minutes, rel=1e-12)
+
+
+def test_rohmert_is_infinite_at_or_below_sustainable_level() -> None:
+    model = endurance_model("rohmert")
+    times = model.endurance_time_s([0.0, 10.0, 15.0, 15.001], "shoulder")
+    assert np.isinf(times[:3]).all()
+    assert times[3] == pytest.approx(60 * 15.46, rel=1e-3)
+
+
+def test_rohmert_above_mvc_keeps_the_mvc_value() -> None:
+    model = endurance_model("rohmert")
+    np.testing.assert_allclose(model.endurance_time_s([110.0, 200.0], "shoulder"), [6.0, 6.0])
+
+
+def test_registry_builds_each_model_by_name() -> None:
+    kinds = {name: type(endurance_model(name)) for name in ENDURANCE_MODELS}
+    assert kinds == {"manenica": Manenica, "frey_law_avin": FreyLawAvin, "rohmert": Rohmert}
+    assert all(endurance_model(name).name == name for name in ENDURANCE_MODELS)
+
+
+def test_unknown_model_names_value_and_allowed_names() -> None:
+    with pytest.raises(ProblemError, match=r"fatigue\.endurance = 'nope'") as error:
+        endurance_model("nope")
+    assert "one of manenica, frey_law_avin, rohmert" in str(error.value)
+
+
+def test_parameters_carry_units_and_status() -> None:
+    manenica = endurance_model("manenica").parameters(["shoulder"])
+    assert [(p.name, p.value, p.status) for p in manenica] == [
+        ("endurance.manenica.a", 2.70, "verified"),
+        ("endurance.manenica.b", 0.0448, "verified"),
+    ]
+    frey = endurance_model("frey_law_avin").parameters(["elbow", "shoulder", "elbow"])
+    assert [p.name for p in frey] == [
+        "endurance.frey_law_avin.elbow.b0",
+        "endurance.frey_law_avin.elbow.b1",
+        "endurance.frey_law_avin.shoulder.b0",
+        "endurance.frey_law_avin.shoulder.b1",
+    ]
+    assert frey[0].unit == "s"
+    assert frey[0].evidence == "C2"
+    rohmert = endurance_model("rohmert").parameters([])
+    assert {p.status for p in rohmert} == {"estimate"}
