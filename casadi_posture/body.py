@@ -1,0 +1,237 @@
+"""Kinematic tree of revolute degrees of freedom as CasADi expressions (SPEC §1).
+
+Everything is described at the zero posture, in the world frame: each DOF by
+its joint centre and axis, each segment by its mass and centre of mass, each
+landmark by its position. At the zero posture every body frame is aligned
+with the world, so a DOF's axis in its parent's frame equals its world axis
+at zero, and forward kinematics is a product of exponentials:
+
+    R_j(q) = R_parent(q) · Rot(axis_j, q_j)
+    o_j(q) = o_parent(q) + R_parent(q) · (origin_j - origin_parent)
+    x(q)   = o_j(q) + R_j(q) · (x0 - origin_j)        for a point x0 carried by DOF j
+
+Jacobians come from CasADi's algorithmic differentiation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .errors import ProblemError
+
+Vector3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Dof:
+    """A revolute degree of freedom and its two half-joints (antagonistic muscle groups).
+
+    ``origin`` [m] and ``axis`` are in the world frame at the zero posture;
+    ``lower``/``upper`` [rad] bound the angle. ``positive`` is the muscle group
+    that drives the angle up, ``negative`` the one that drives it down.
+    ``region`` names the joint region of the strength and endurance tables.
+    """
+
+    name: str
+    parent: str | None
+    origin: Vector3
+    axis: Vector3
+    lower: float
+    upper: float
+    region: str
+    positive: str
+    negative: str
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A rigid segment: ``mass`` [kg], centre of mass ``com`` [m, world, zero posture].
+
+    ``dof`` is the DOF whose frame carries it (``None``: fixed to the world);
+    ``proximal`` and ``distal`` name the landmarks at its end points.
+    """
+
+    name: str
+    dof: str | None
+    mass: float
+    com: Vector3
+    proximal: str
+    distal: str
+
+
+@dataclass(frozen=True)
+class Landmark:
+    """A named point of the body (joint centre, effector) [m, world, zero posture]."""
+
+    name: str
+    dof: str | None
+    position: Vector3
+
+
+@dataclass(frozen=True)
+class HalfJoint:
+    """One muscle group of a DOF: ``sign`` +1 if it drives the angle up, -1 if down."""
+
+    name: str
+    dof: str
+    dof_index: int
+    sign: int
+    region: str
+
+
+def rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
+    """Rotation matrix about a unit ``axis`` by ``angle`` [rad] (Rodrigues' formula)."""
+    k = ca.SX(
+        np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    )
+    return ca.SX.eye(3) + ca.sin(angle) * k + (1.0 - ca.cos(angle)) * (k @ k)
+
+
+class BodyModel:
+    """A kinematic tree with its symbolic joint vector ``q`` [rad] and forward kinematics."""
+
+    def __init__(
+        self,
+        name: str,
+        dofs: Sequence[Dof],
+        segments: Sequence[Segment],
+        landmarks: Sequence[Landmark],
+        *,
+        gravity: float,
+    ) -> None:
+        self.name = name
+        self.dofs = tuple(dofs)
+        self.segments = tuple(segments)
+        self.landmarks = {lm.name: lm for lm in landmarks}
+        self.gravity = gravity
+        self._check()
+        self.index = {d.name: i for i, d in enumerate(self.dofs)}
+        self.q = ca.SX.sym("q", len(self.dofs))
+        self._rotation: dict[str | None, ca.SX] = {None: ca.SX.eye(3)}
+        self._origin: dict[str | None, ca.SX] = {None: ca.SX.zeros(3)}
+        self._origin0: dict[str | None, np.ndarray] = {None: np.zeros(3)}
+        for i, dof in enumerate(self.dofs):
+            r_parent = self._rotation[dof.parent]
+            origin0 = np.asarray(dof.origin, dtype=float)
+            offset = ca.DM(origin0 - self._origin0[dof.parent])
+            self._origin[dof.name] = self._origin[dof.parent] + r_parent @ offset
+            self._rotation[dof.name] = r_parent @ rotation(self.axis(dof.name), self.q[i])
+            self._origin0[dof.name] = origin0
+
+    def _check(self) -> None:
+        seen: set[str] = set()
+        for dof in self.dofs:
+            if dof.name in seen:
+                raise ProblemError(None, "body.dofs", dof.name, "unique DOF names")
+            if dof.parent is not None and dof.parent not in seen:
+                raise ProblemError(
+                    None,
+                    f"body.dofs.{dof.name}.parent",
+                    dof.parent,
+                    "a DOF defined before it (the tree in topological order)",
+                )
+            if np.linalg.norm(dof.axis) < 1e-12:
+                raise ProblemError(None, f"body.dofs.{dof.name}.axis", dof.axis, "a non-zero axis")
+            if not dof.lower < dof.upper:
+                raise ProblemError(
+                    None,
+                    f"body.dofs.{dof.name}.range_deg",
+                    [np.degrees(dof.lower), np.degrees(dof.upper)],
+                    "min < max",
+                )
+            seen.add(dof.name)
+        carried = [(f"body.segments.{s.name}", s.dof) for s in self.segments]
+        carried += [(f"body.landmarks.{lm.name}", lm.dof) for lm in self.landmarks.values()]
+        for key, dof_name in carried:
+            if dof_name is not None and dof_name not in seen:
+                raise ProblemError(None, f"{key}.dof", dof_name, f"one of {sorted(seen)}")
+        for segment in self.segments:
+            if segment.mass < 0:
+                raise ProblemError(
+                    None, f"body.segments.{segment.name}.mass_kg", segment.mass, "a mass >= 0"
+                )
+
+    @property
+    def n(self) -> int:
+        """Number of DOFs."""
+        return len(self.dofs)
+
+    @property
+    def dof_names(self) -> list[str]:
+        return [d.name for d in self.dofs]
+
+    @property
+    def lower(self) -> np.ndarray:
+        """Lower joint limits [rad]."""
+        return np.array([d.lower for d in self.dofs])
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Upper joint limits [rad]."""
+        return np.array([d.upper for d in self.dofs])
+
+    @property
+    def half_joints(self) -> list[HalfJoint]:
+        """The two half-joints of every DOF, positive first, in DOF order."""
+        out = []
+        for i, dof in enumerate(self.dofs):
+            out.append(HalfJoint(dof.positive, dof.name, i, +1, dof.region))
+            out.append(HalfJoint(dof.negative, dof.name, i, -1, dof.region))
+        return out
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of all segments [kg]."""
+        return float(sum(s.mass for s in self.segments))
+
+    def axis(self, dof: str) -> np.ndarray:
+        """Unit axis of ``dof`` in the world frame at the zero posture."""
+        a = np.asarray(self.dofs[self.index[dof]].axis, dtype=float)
+        return a / np.linalg.norm(a)
+
+    def ancestors(self, dof: str | None) -> list[str]:
+        """The DOFs that move the frame of ``dof``, root first, ``dof`` included."""
+        chain: list[str] = []
+        while dof is not None:
+            chain.append(dof)
+            dof = self.dofs[self.index[dof]].parent
+        return chain[::-1]
+
+    def rotation(self, dof: str | None) -> ca.SX:
+        """Orientation of the frame of ``dof`` in the world (3×3, SX)."""
+        return self._rotation[dof]
+
+    def point(self, dof: str | None, position0: Sequence[float]) -> ca.SX:
+        """World position [m] of a point carried by ``dof``, given at the zero posture."""
+        x0 = np.asarray(position0, dtype=float) - self._origin0[dof]
+        return self._origin[dof] + self._rotation[dof] @ ca.DM(x0)
+
+    def landmark(self, name: str) -> ca.SX:
+        """World position [m] of a landmark."""
+        lm = self.landmarks[name]
+        return self.point(lm.dof, lm.position)
+
+    def segment_com(self, segment: Segment) -> ca.SX:
+        """World position [m] of a segment's centre of mass."""
+        return self.point(segment.dof, segment.com)
+
+    def com(self) -> ca.SX:
+        """Whole-body centre of mass [m]."""
+        weighted = sum((s.mass * self.segment_com(s) for s in self.segments), ca.SX.zeros(3))
+        return weighted / self.total_mass
+
+    def angular_jacobian(self, dof: str | None) -> ca.SX:
+        """3×n map from joint rates to the angular velocity of the frame of ``dof``."""
+        columns = [ca.SX.zeros(3) for _ in self.dofs]
+        for name in self.ancestors(dof):
+            parent = self.dofs[self.index[name]].parent
+            columns[self.index[name]] = self._rotation[parent] @ ca.DM(self.axis(name))
+        return ca.horzcat(*columns)
+
+    def jacobian(self, expression: ca.SX) -> ca.SX:
+        """Jacobian of an expression of ``q`` by algorithmic differentiation."""
+        return ca.jacobian(expression, self.q)

@@ -1,0 +1,44 @@
+"""Shared fixtures: the shipped problems and small hand-built models."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from casadi_posture.body import BodyModel, Dof, Landmark, Segment
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+@pytest.fixture
+def problems_dir() -> Path:
+    return PROBLEMS
+
+
+def chain_3d() -> BodyModel:
+    """A branching 3-D tree with non-parallel, non-orthogonal axes and offsets."""
+    r = np.radians
+    dofs = [
+        Dof("a", None, (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), -r(170), r(170), "shoulder", "a+", "a-"),
+        Dof("b", "a", (0.02, 0.01, 0.0), (1.0, 0.3, 0.0), -r(90), r(90), "shoulder", "b+", "b-"),
+        Dof(
+            "c", "b", (0.02, 0.01, -0.05), (0.2, 1.0, 0.4), -r(120), r(120), "shoulder", "c+", "c-"
+        ),
+        Dof("d", "c", (0.05, -0.02, -0.30), (0.0, -1.0, 0.1), r(0), r(150), "elbow", "d+", "d-"),
+        Dof("e", "a", (-0.1, 0.2, 0.05), (0.6, -0.2, 0.77), -r(60), r(60), "trunk", "e+", "e-"),
+    ]
+    segments = [
+        Segment("s_b", "b", 0.7, (0.03, 0.0, -0.02), "o", "p"),
+        Segment("s_c", "c", 2.0, (0.04, 0.0, -0.18), "p", "q"),
+        Segment("s_d", "d", 1.3, (0.10, -0.05, -0.42), "q", "tip"),
+        Segment("s_e", "e", 0.9, (-0.15, 0.35, 0.10), "o", "side"),
+        Segment("fixed", None, 5.0, (0.0, 0.0, 0.2), "o", "o"),
+    ]
+    landmarks = [
+        Landmark("o", None, (0.0, 0.0, 0.0)),
+        Landmark("tip", "d", (0.12, -0.05, -0.60)),
+        Landmark("side", "e", (-0.2, 0.4, 0.1)),
+    ]
+    return BodyModel("chain_3d", dofs, segments, landmarks, gravity=9.81)
