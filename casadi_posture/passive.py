@@ -1,0 +1,43 @@
+"""Passive (ligament and tissue) joint torque models, per DOF (SPEC §2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import casadi as ca
+
+
+class PassiveTorque(Protocol):
+    """τp(q_j) [N·m] of one DOF, monotonically decreasing in its angle q_j [rad]."""
+
+    def expression(self, q: ca.SX) -> ca.SX: ...
+
+
+@dataclass(frozen=True)
+class ExponentialPassive:
+    """τp = k1·exp(-k2·(q - q1)) - k3·exp(-k4·(q2 - q)) (Riener & Edrich 1999 style).
+
+    k1, k3 [N·m]; k2, k4 [1/rad]; q1, q2 [rad]: the torque is k1 at q1 from the
+    lower-limit term and -k3 at q2 from the upper-limit term.
+    """
+
+    k1: float
+    k2: float
+    q1: float
+    k3: float
+    k4: float
+    q2: float
+
+    def expression(self, q: ca.SX) -> ca.SX:
+        return self.k1 * ca.exp(-self.k2 * (q - self.q1)) - self.k3 * ca.exp(
+            -self.k4 * (self.q2 - q)
+        )
+
+
+@dataclass(frozen=True)
+class NoPassive:
+    """No passive torque: the joint is free up to its limits (3DSSPP-style statics)."""
+
+    def expression(self, q: ca.SX) -> ca.SX:
+        return ca.SX(0.0)

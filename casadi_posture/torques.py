@@ -1,0 +1,99 @@
+"""External, passive and active joint torques and half-joint loads (SPEC §2; paper eqs 1–5).
+
+All torques are about the joint axis, positive in the direction of increasing
+angle. External torque by virtual work, ``τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M``;
+static equilibrium ``τa + τp + τe = 0`` gives the active torque ``τa = -(τp + τe)``.
+When ``τa_j > 0`` the positive half-joint of DOF j carries it, otherwise the
+negative one; its load is ``T_N = 100·|τa|/st`` [%MVC].
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .body import BodyModel
+from .loads import LOAD_PARAMETERS, Load, pack
+from .passive import PassiveTorque
+from .strength import Strength
+
+
+@dataclass(frozen=True)
+class Torques:
+    """Torques at one posture; per DOF arrays [N·m], per half-joint arrays in
+    ``BodyModel.half_joints`` order (positive group of each DOF first)."""
+
+    q: np.ndarray
+    external: np.ndarray
+    passive: np.ndarray
+    active: np.ndarray
+    strength: np.ndarray
+    half_joint_torque: np.ndarray
+
+    @property
+    def load_pct_mvc(self) -> np.ndarray:
+        """Normalised torque T_N of every half-joint [%MVC] (paper eq. 1, in percent)."""
+        return 100.0 * self.half_joint_torque / self.strength
+
+
+class TorqueModel:
+    """The torque functions of one body with its loads, compiled once.
+
+    ``function(q, loads) -> (tau_ext, tau_pas, tau_act, strength)`` with ``loads``
+    the vector of :func:`casadi_posture.loads.pack`, so load masses and forces
+    can change without rebuilding anything.
+    """
+
+    def __init__(
+        self,
+        body: BodyModel,
+        loads: Sequence[Load],
+        passive: Mapping[str, PassiveTorque],
+        strength: Mapping[str, Strength],
+    ) -> None:
+        self.body = body
+        self.loads = tuple(loads)
+        q = body.q
+        p = ca.SX.sym("loads", LOAD_PARAMETERS * len(self.loads))
+        self.tau_ext = self._external(p)
+        self.tau_pas = ca.vertcat(
+            *[passive[d.name].expression(q[i]) for i, d in enumerate(body.dofs)]
+        )
+        self.tau_act = -(self.tau_pas + self.tau_ext)
+        self.strength = ca.vertcat(*[strength[h.name].expression(q) for h in body.half_joints])
+        self.p = p
+        self.function = ca.Function(
+            "torques",
+            [q, p],
+            [self.tau_ext, self.tau_pas, self.tau_act, self.strength],
+            ["q", "loads"],
+            ["tau_ext", "tau_pas", "tau_act", "strength"],
+        )
+        self.default_loads = pack(self.loads)
+
+    def _external(self, p: ca.SX) -> ca.SX:
+        body = self.body
+        g = ca.DM([0.0, 0.0, -body.gravity])
+        tau = ca.SX.zeros(body.n)
+        for segment in body.segments:
+            tau += body.jacobian(body.segment_com(segment)).T @ (segment.mass * g)
+        for k, load in enumerate(self.loads):
+            mass = p[LOAD_PARAMETERS * k]
+            force = p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
+            moment = p[LOAD_PARAMETERS * k + 4 : LOAD_PARAMETERS * k + 7]
+            landmark = body.landmarks[load.at]
+            tau += body.jacobian(body.landmark(load.at)).T @ (mass * g + force)
+            tau += body.angular_jacobian(landmark.dof).T @ moment
+        return tau
+
+    def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
+        """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own."""
+        p = self.default_loads if loads is None else loads
+        tau_e, tau_p, tau_a, st = (np.asarray(v).reshape(-1) for v in self.function(q, p))
+        carried = np.empty(2 * self.body.n)
+        carried[0::2] = np.maximum(tau_a, 0.0)
+        carried[1::2] = np.maximum(-tau_a, 0.0)
+        return Torques(np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried)

@@ -1,0 +1,187 @@
+"""External, passive and active torques against hand calculations and energy arguments."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+from conftest import PROBLEMS, chain_3d
+
+from casadi_posture import parameters
+from casadi_posture.curve import torque_curve
+from casadi_posture.loads import Load, pack
+from casadi_posture.passive import ExponentialPassive, NoPassive
+from casadi_posture.problem import load_problem
+from casadi_posture.strength import ConstantStrength, TabulatedStrength
+from casadi_posture.torques import TorqueModel
+
+G = 9.81
+
+
+def _arm():
+    return load_problem(PROBLEMS / "holding_m45.toml")
+
+
+@pytest.mark.parametrize(
+    ("qs_deg", "qe_deg"), [(0, 0), (90, 0), (90, 90), (16.88, 77.29), (-45, 120), (150, 30)]
+)
+def test_sagittal_gravity_torques_by_hand(qs_deg: float, qe_deg: float) -> None:
+    """τe of the sagittal arm from moment arms: each weight times its horizontal distance."""
+    problem = _arm()
+    model = problem.torque_model()
+    qs, qe = math.radians(qs_deg), math.radians(qe_deg)
+    # reference male, de Leva 1996: lengths, masses, COM distances from the proximal joint
+    l_ua, l_fa = 0.2817, 0.2689
+    m_ua, m_fa, m_h, m_load = 0.0271 * 73, 0.0162 * 73, 0.0061 * 73, 2.5
+    c_ua, c_fa, c_h = 0.5772 * l_ua, 0.4574 * l_fa, 0.7900 * 0.0862
+    # horizontal (forward) distance of each weight from the elbow and from the shoulder
+    from_elbow = {
+        "fa": c_fa * math.sin(qs + qe),
+        "h": (l_fa + c_h) * math.sin(qs + qe),
+        "load": l_fa * math.sin(qs + qe),
+    }
+    elbow_x = l_ua * math.sin(qs)
+    tau_elbow = -G * (m_fa * from_elbow["fa"] + m_h * from_elbow["h"] + m_load * from_elbow["load"])
+    tau_shoulder = -G * m_ua * c_ua * math.sin(qs) + tau_elbow - G * (m_fa + m_h + m_load) * elbow_x
+    result = model.evaluate([qs, qe])
+    assert result.external == pytest.approx([tau_shoulder, tau_elbow], abs=1e-12)
+
+
+def test_sanity_values_of_biomech_data() -> None:
+    """biomech-data §0.2: arm horizontal, elbow straight: 24.1 and 9.5 N·m; at 90/90: 0, 14.6."""
+    model = _arm().torque_model()
+    straight = model.evaluate([math.pi / 2, 0.0])
+    assert -straight.external == pytest.approx([24.1, 9.5], abs=0.05)
+    bent = model.evaluate([math.pi / 2, math.pi / 2])
+    assert -bent.external == pytest.approx([14.6, 0.0], abs=0.05)
+
+
+def _chain_model(loads: list[Load]) -> TorqueModel:
+    body = chain_3d()
+    passive = {d.name: NoPassive() for d in body.dofs}
+    strength = {h.name: ConstantStrength(50.0) for h in body.half_joints}
+    return TorqueModel(body, loads, passive, strength)
+
+
+def test_gravity_torque_is_minus_the_potential_energy_gradient_3d() -> None:
+    loads = [Load("weight", "tip", mass=1.7)]
+    model = _chain_model(loads)
+    body = model.body
+    height = sum((s.mass * body.segment_com(s)[2] for s in body.segments), ca.SX(0))
+    height += 1.7 * body.landmark("tip")[2]
+    energy = ca.Function("V", [body.q], [G * height])
+    rng = np.random.default_rng(7)
+    for q in rng.uniform(body.lower, body.upper, size=(5, body.n)):
+        h = 1e-6
+        gradient = [
+            (float(energy(q + h * e)) - float(energy(q - h * e))) / (2 * h) for e in np.eye(body.n)
+        ]
+        assert model.evaluate(q).external == pytest.approx(-np.array(gradient), abs=1e-7)
+
+
+def test_external_force_and_moment_by_virtual_work_3d() -> None:
+    force, moment = (3.0, -2.0, 5.0), (0.4, -1.1, 0.7)
+    model = _chain_model([Load("push", "tip", force=force, moment=moment)])
+    body = model.body
+    without_gravity = _chain_model([Load("push", "tip")])
+    tip = ca.Function("x", [body.q], [body.landmark("tip")])
+    rot = ca.Function("R", [body.q], [body.rotation("d")])
+    rng = np.random.default_rng(8)
+    for q in rng.uniform(body.lower, body.upper, size=(4, body.n)):
+        tau = model.evaluate(q).external - without_gravity.evaluate(q).external
+        h = 1e-6
+        for j, e in enumerate(np.eye(body.n)):
+            dx = (np.asarray(tip(q + h * e)) - np.asarray(tip(q - h * e))).reshape(-1) / (2 * h)
+            skew = (
+                (np.asarray(rot(q + h * e)) - np.asarray(rot(q - h * e))) / (2 * h)
+            ) @ np.asarray(rot(q)).T
+            omega = np.array([skew[2, 1], skew[0, 2], skew[1, 0]])
+            assert tau[j] == pytest.approx(np.dot(force, dx) + np.dot(moment, omega), abs=1e-7)
+
+
+def test_load_parameters_change_torques_without_rebuilding() -> None:
+    problem = _arm()
+    model = problem.torque_model()
+    q = problem.posture
+    base = model.evaluate(q)
+    heavier = model.evaluate(q, pack([Load("weight", "wrist", mass=5.0)]))
+    lever = np.asarray(
+        ca.Function("J", [model.body.q], [model.body.jacobian(model.body.landmark("wrist"))])(q)
+    )
+    assert heavier.external - base.external == pytest.approx(lever.T @ [0, 0, -G * 2.5])
+
+
+@pytest.mark.parametrize("dof", ["shoulder_flexion", "elbow_flexion"])
+def test_default_passive_torque_strictly_decreasing(dof: str) -> None:
+    problem = _arm()
+    j = problem.body.index[dof]
+    angles = np.linspace(problem.body.lower[j], problem.body.upper[j], 2001)
+    q = ca.SX.sym("q")
+    tau = ca.Function("tp", [q], [problem.passive[dof].expression(q)])
+    values = np.asarray(tau(angles)).reshape(-1)
+    assert np.all(np.diff(values) < 0)
+    assert values[0] > 0 > values[-1]
+
+
+def test_passive_torque_values_of_biomech_data() -> None:
+    """biomech-data §1.3 check: elbow τp(-10°) = +101, τp(150°) = -70, τp(90°) = -0.014 N·m."""
+    t = parameters.load("joints")
+    k = {
+        n: t[f"joints.elbow_flexion.passive.{n}"].value
+        for n in ("k1", "k2", "q1", "k3", "k4", "q2")
+    }
+    model = ExponentialPassive(
+        k["k1"], k["k2"], math.radians(k["q1"]), k["k3"], k["k4"], math.radians(k["q2"])
+    )
+    q = ca.SX.sym("q")
+    f = ca.Function("tp", [q], [model.expression(q)])
+    assert float(f(math.radians(-10))) == pytest.approx(101.0, rel=0.01)
+    assert float(f(math.radians(150))) == pytest.approx(-70.0, rel=0.01)
+    assert float(f(math.radians(90))) == pytest.approx(-0.014, abs=0.001)
+
+
+def test_active_torque_balances_and_half_joints_split_it() -> None:
+    problem = _arm()
+    result = problem.torque_model().evaluate(problem.posture)
+    assert result.active + result.passive + result.external == pytest.approx(0.0, abs=1e-12)
+    for i, tau in enumerate(result.active):
+        positive, negative = result.half_joint_torque[2 * i : 2 * i + 2]
+        assert positive - negative == pytest.approx(tau)
+        assert min(positive, negative) == 0.0
+    assert result.load_pct_mvc == pytest.approx(100 * result.half_joint_torque / result.strength)
+
+
+def test_default_strengths_of_biomech_data() -> None:
+    """biomech-data §2.4: 48, 33, 43, 60 N·m for the reference male."""
+    problem = _arm()
+    result = problem.torque_model().evaluate(problem.posture)
+    assert result.strength == pytest.approx([43.0, 60.1, 47.8, 32.9], abs=0.15)
+
+
+def test_tabulated_strength_interpolates_and_holds_its_ends() -> None:
+    q = ca.SX.sym("q", 2)
+    model = TabulatedStrength(1, (0.0, 1.0, 2.0), (40.0, 50.0, 30.0))
+    f = ca.Function("st", [q], [model.expression(q)])
+    assert float(f([0.0, 0.5])) == pytest.approx(45.0)
+    assert float(f([0.0, 1.5])) == pytest.approx(40.0)
+    assert float(f([9.0, -1.0])) == pytest.approx(40.0)
+    assert float(f([0.0, 3.0])) == pytest.approx(30.0)
+
+
+def test_frontal_elbow_by_hand_and_three_zero_active_postures() -> None:
+    """Fig. 3: forearm and hand weight, τe = -W·cos(q); zeros near each limit and mid-range."""
+    problem = load_problem(PROBLEMS / "frontal_elbow.toml")
+    model = problem.torque_model()
+    moment = 0.0162 * 73 * 0.4574 * 0.2689 + 0.0061 * 73 * (0.2689 + 0.79 * 0.0862)
+    for q in np.radians([-10, 0, 30, 90, 135]):
+        assert model.evaluate([q]).external[0] == pytest.approx(
+            -G * moment * math.cos(q), abs=1e-12
+        )
+    curve = torque_curve(model, problem.posture, "elbow_flexion")
+    kinds = [z.kind for z in curve.zeros]
+    assert kinds == ["near limit (passive)", "mid-range (active)", "near limit (passive)"]
+    assert math.degrees(curve.zeros[1].angle) == pytest.approx(90.0, abs=1.0)
+    for zero in curve.zeros:
+        assert model.evaluate([zero.angle]).active[0] == pytest.approx(0.0, abs=1e-9)
