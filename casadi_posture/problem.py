@@ -1,0 +1,371 @@
+"""Problem files: read, validate and resolve into a body with its loads, tasks and settings."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+import types
+import typing
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ValidationError
+
+from . import parameters
+from .anthropometry import SegmentInertia, segment_inertia
+from .body import BodyModel
+from .endurance import endurance_model
+from .errors import MISSING, ProblemError
+from .fatigue import fatigue_model
+from .loads import Load
+from .models import MODELS
+from .parameters import Parameter
+from .passive import ExponentialPassive, NoPassive, PassiveTorque
+from .schema import (
+    ComTask,
+    ExponentialPassiveSpec,
+    HalfJointSpec,
+    OrientationTask,
+    PostureTask,
+    ProblemSpec,
+    Task,
+)
+from .strength import ConstantStrength, Strength, TabulatedStrength, default_strength
+from .torques import TorqueModel
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A validated problem: the body, its torque model inputs, the posture [rad] and settings."""
+
+    path: Path
+    spec: ProblemSpec
+    body: BodyModel
+    passive: dict[str, PassiveTorque]
+    strength: dict[str, Strength]
+    loads: tuple[Load, ...]
+    posture: np.ndarray
+    parameters: tuple[Parameter, ...]
+
+    @property
+    def tasks(self) -> list[Task]:
+        return list(self.spec.tasks)
+
+    def torque_model(self) -> TorqueModel:
+        """The compiled torque functions of this problem (build once, evaluate many)."""
+        return TorqueModel(self.body, self.loads, self.passive, self.strength)
+
+    def with_posture(self, degrees: dict[str, float], key: str = "--posture") -> Problem:
+        """The same problem at another posture, given per DOF in degrees."""
+        q = self.posture.copy()
+        for name, angle in degrees.items():
+            q[_dof_index(self.body, name, f"{key} {name}", self.path)] = math.radians(angle)
+        _check_posture(self.body, q, key, self.path)
+        return replace(self, posture=q)
+
+
+def load_problem(path: str | Path) -> Problem:
+    """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`."""
+    path = Path(path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ProblemError(path, None, None, "the file does not exist") from None
+    except IsADirectoryError:
+        raise ProblemError(path, None, None, "a problem file, got a directory") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise ProblemError(path, None, None, f"a readable UTF-8 file ({error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ProblemError(path, None, None, f"valid TOML ({error})") from None
+    try:
+        spec = ProblemSpec.model_validate(raw)
+    except ValidationError as error:
+        raise _problem_error(path, error, raw) from None
+    try:
+        return resolve(spec, path)
+    except ProblemError as error:
+        if error.file is None:
+            raise ProblemError(path, error.key, error.value, error.expected) from None
+        raise
+
+
+def resolve(spec: ProblemSpec, path: Path) -> Problem:
+    """Build the body model and its loads, strengths and passive torques from a spec."""
+    body_spec = spec.body
+    if body_spec.model not in MODELS:
+        raise ProblemError(path, "body.model", body_spec.model, f"one of {sorted(MODELS)}")
+    recipe = MODELS[body_spec.model]
+    records: list[Parameter] = [parameters.load("constants")["constants.gravity"]]
+
+    _unknown(path, "body.segments", body_spec.segments, recipe.segments)
+    segments = {}
+    for name in recipe.segments:
+        inertia = segment_inertia(
+            name, sex=body_spec.sex, stature=body_spec.stature_m, body_mass=body_spec.mass_kg
+        )
+        segments[name] = _override_segment(inertia, body_spec.segments.get(name), path)
+        records += segments[name].parameters
+
+    _unknown(path, "body.dofs", body_spec.dofs, recipe.dofs)
+    ranges: dict[str, tuple[float, float]] = {}
+    passive: dict[str, PassiveTorque] = {}
+    for name in recipe.dofs:
+        table = parameters.load("joints")
+        override = body_spec.dofs.get(name)
+        lo, hi = table[f"joints.{name}.range.lower"], table[f"joints.{name}.range.upper"]
+        if override is not None and override.range_deg is not None:
+            where = f"{path} body.dofs.{name}.range_deg"
+            lo = lo.overridden(override.range_deg[0], where)
+            hi = hi.overridden(override.range_deg[1], where)
+        ranges[name] = (math.radians(lo.value), math.radians(hi.value))
+        records += [lo, hi]
+        passive[name], passive_records = _passive(
+            name, None if override is None else override.passive, path
+        )
+        records += passive_records
+
+    gravity = records[0].value
+    body = recipe.build(segments, ranges, gravity)
+
+    known_groups = [h.name for h in body.half_joints]
+    _unknown(path, "body.half_joints", body_spec.half_joints, known_groups)
+    strength: dict[str, Strength] = {}
+    for group in known_groups:
+        strength[group], record = _strength(
+            group, body_spec.half_joints.get(group), body, spec, path
+        )
+        records.append(record)
+
+    loads = tuple(_load(body, spec, i, path) for i in range(len(spec.loads)))
+    _check_tasks(body, spec, path)
+    regions = [h.region for h in body.half_joints]
+    endurance = endurance_model(spec.fatigue.endurance)
+    fatigue = fatigue_model(
+        spec.fatigue.model,
+        regions=regions,
+        endurance=endurance,
+        recovery_threshold_pct_mvc=spec.fatigue.load_threshold_pct_mvc,
+    )
+    records += endurance.parameters(regions) + fatigue.parameters()
+
+    q = np.zeros(body.n)
+    for name, angle in spec.posture_deg.items():
+        q[_dof_index(body, name, f"posture_deg.{name}", path)] = math.radians(angle)
+    _check_posture(body, q, "posture_deg", path)
+    unique: dict[str, Parameter] = {}
+    for record in records:
+        unique.setdefault(record.name, record)
+    return Problem(path, spec, body, passive, strength, loads, q, tuple(unique.values()))
+
+
+def _override_segment(inertia: SegmentInertia, override: Any, path: Path) -> SegmentInertia:
+    if override is None:
+        return inertia
+    where = f"{path} body.segments.{inertia.name}"
+    changes = {}
+    if override.mass_kg is not None:
+        changes["mass"] = override.mass_kg
+    if override.length_m is not None:
+        changes["length"] = override.length_m
+    if override.com_fraction is not None:
+        changes["com_fraction"] = override.com_fraction
+    updated = replace(inertia, **changes)
+    records = []
+    for record in inertia.parameters:
+        field = record.name.rsplit(".", 1)[-1]
+        new = {
+            "mass": updated.mass,
+            "length": updated.length,
+            "com_distance": updated.com_distance,
+        }.get(field)
+        changed = new is not None and not math.isclose(new, record.value, rel_tol=1e-12)
+        records.append(record.overridden(round(new, 6), where) if changed else record)
+    return replace(updated, parameters=tuple(records))
+
+
+def _passive(dof: str, override: Any, path: Path) -> tuple[PassiveTorque, list[Parameter]]:
+    table = parameters.load("joints")
+    names = ("k1", "k2", "q1", "k3", "k4", "q2")
+    records = [table[f"joints.{dof}.passive.{k}"] for k in names]
+    if override is not None and not isinstance(override, ExponentialPassiveSpec):
+        return NoPassive(), [
+            Parameter(
+                f"joints.{dof}.passive.model", "none", "", f"{path} body.dofs.{dof}.passive", "user"
+            )
+        ]
+    if override is not None:
+        where = f"{path} body.dofs.{dof}.passive"
+        given = (
+            override.k1_Nm,
+            override.k2_per_rad,
+            override.q1_deg,
+            override.k3_Nm,
+            override.k4_per_rad,
+            override.q2_deg,
+        )
+        records = [r.overridden(v, where) for r, v in zip(records, given, strict=True)]
+    k1, k2, q1, k3, k4, q2 = (r.value for r in records)
+    model = ExponentialPassive(k1, k2, math.radians(q1), k3, k4, math.radians(q2))
+    return model, records
+
+
+def _strength(
+    group: str, override: HalfJointSpec | None, body: BodyModel, spec: ProblemSpec, path: Path
+) -> tuple[Strength, Parameter]:
+    where = f"{path} body.half_joints.{group}"
+    if override is not None and override.strength_Nm is not None:
+        value = override.strength_Nm
+        return ConstantStrength(value), Parameter(f"strength.{group}", value, "N·m", where, "user")
+    if override is not None and override.strength_curve is not None:
+        curve = override.strength_curve
+        index = _dof_index(body, curve.dof, f"body.half_joints.{group}.strength_curve.dof", path)
+        model = TabulatedStrength(
+            index, tuple(math.radians(a) for a in curve.angle_deg), tuple(curve.strength_Nm)
+        )
+        table = list(zip(curve.angle_deg, curve.strength_Nm, strict=True))
+        return model, Parameter(f"strength.{group}", table, "[deg, N·m]", where, "user")
+    b = spec.body
+    return default_strength(
+        group, sex=b.sex, stature=b.stature_m, body_mass=b.mass_kg, age=b.age_years
+    )
+
+
+def _load(body: BodyModel, spec: ProblemSpec, i: int, path: Path) -> Load:
+    item = spec.loads[i]
+    if item.at not in body.landmarks:
+        raise ProblemError(path, f"loads[{i}].at", item.at, f"one of {sorted(body.landmarks)}")
+    return Load(item.name, item.at, item.mass_kg, tuple(item.force_N), tuple(item.moment_Nm))
+
+
+def _check_tasks(body: BodyModel, spec: ProblemSpec, path: Path) -> None:
+    names: set[str] = set()
+    for i, task in enumerate(spec.tasks):
+        key = f"tasks[{i}]"
+        if task.name in names:
+            raise ProblemError(path, f"{key}.name", task.name, "a name no other task has")
+        names.add(task.name)
+        if isinstance(task, OrientationTask):
+            segments = [s.name for s in body.segments]
+            if task.segment not in segments:
+                raise ProblemError(path, f"{key}.segment", task.segment, f"one of {segments}")
+        elif isinstance(task, PostureTask):
+            for dof in task.reference_deg:
+                _dof_index(body, dof, f"{key}.reference_deg.{dof}", path)
+        elif not isinstance(task, ComTask) and task.effector not in body.landmarks:
+            raise ProblemError(
+                path, f"{key}.effector", task.effector, f"one of {sorted(body.landmarks)}"
+            )
+
+
+def _dof_index(body: BodyModel, name: str, key: str, path: Path) -> int:
+    if name not in body.index:
+        raise ProblemError(path, key, name, f"a DOF of {body.name}: one of {body.dof_names}")
+    return body.index[name]
+
+
+def _check_posture(body: BodyModel, q: np.ndarray, key: str, path: Path) -> None:
+    for i, dof in enumerate(body.dofs):
+        if not dof.lower - 1e-12 <= q[i] <= dof.upper + 1e-12:
+            raise ProblemError(
+                path,
+                f"{key}.{dof.name}",
+                round(math.degrees(q[i]), 6),
+                f"an angle within the range [{math.degrees(dof.lower):g}, "
+                f"{math.degrees(dof.upper):g}] deg",
+            )
+
+
+def _unknown(path: Path, key: str, given: dict[str, Any], known: Any) -> None:
+    for name in given:
+        if name not in known:
+            raise ProblemError(path, f"{key}.{name}", name, f"one of {sorted(known)}")
+
+
+def _problem_error(path: Path, error: ValidationError, raw: dict[str, Any]) -> ProblemError:
+    """The first pydantic error as one line naming the key, the value and what was expected."""
+    errors = error.errors(include_url=False)
+    first = errors[0]
+    loc = list(first["loc"])
+    key = _key(loc, raw)
+    message = first["msg"].removeprefix("Value error, ").removeprefix("Input should be ")
+    if first["type"] == "extra_forbidden":
+        allowed = _allowed_keys(loc[:-1])
+        message = f"a known key: one of {allowed}" if allowed else "no such key"
+    elif first["type"] == "missing":
+        message = "this key to be given"
+    elif first["type"] in ("too_short", "too_long"):
+        ctx = first.get("ctx", {})
+        n = ctx.get("min_length") if first["type"] == "too_short" else ctx.get("max_length")
+        message = f"{'at least' if first['type'] == 'too_short' else 'at most'} {n} items"
+    more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+    value = first.get("input", MISSING) if first["type"] != "missing" else MISSING
+    if isinstance(value, dict):
+        value = MISSING
+    return ProblemError(path, key, value, message + more)
+
+
+def _key(loc: list[Any], raw: dict[str, Any]) -> str:
+    """Dotted key of a pydantic location, with list indices and without union tags."""
+    text, node = "", raw
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+            node = node[part] if isinstance(node, list) and part < len(node) else None
+            continue
+        if (
+            isinstance(node, dict)
+            and part not in node
+            and part in (node.get("kind"), node.get("model"))
+        ):
+            continue
+        text += f".{part}" if text else str(part)
+        node = node.get(part) if isinstance(node, dict) else None
+    return text
+
+
+def _allowed_keys(loc: list[Any]) -> list[str]:
+    """The keys the table at pydantic location ``loc`` accepts."""
+    annotation: Any = ProblemSpec
+    for part in loc:
+        annotation = _step(annotation, part)
+        if annotation is None:
+            return []
+    models = [leaf for leaf in _leaves(annotation) if _is_model(leaf)]
+    return sorted(models[0].model_fields) if len(models) == 1 else []
+
+
+def _step(annotation: Any, part: Any) -> Any:
+    """The annotation one location step below ``annotation`` (field, item, value or union tag)."""
+    leaves = _leaves(annotation)
+    for leaf in leaves:
+        origin = typing.get_origin(leaf)
+        if _is_model(leaf) and part in leaf.model_fields:
+            return leaf.model_fields[part].annotation
+        if origin is list and isinstance(part, int):
+            return typing.get_args(leaf)[0]
+        if origin is dict and isinstance(part, str):
+            return typing.get_args(leaf)[1]
+    for leaf in leaves:
+        if _is_model(leaf) and any(
+            part in typing.get_args(leaf.model_fields[tag].annotation)
+            for tag in ("kind", "model")
+            if tag in leaf.model_fields
+        ):
+            return leaf
+    return None
+
+
+def _leaves(annotation: Any) -> list[Any]:
+    """The alternatives of a union, unwrapping ``Annotated`` and ``Optional``."""
+    origin = typing.get_origin(annotation)
+    if origin is typing.Annotated:
+        return _leaves(typing.get_args(annotation)[0])
+    if origin in (typing.Union, types.UnionType):
+        return [leaf for arg in typing.get_args(annotation) for leaf in _leaves(arg)]
+    return [annotation]
+
+
+def _is_model(annotation: Any) -> bool:
+    return isinstance(annotation, type) and issubclass(annotation, BaseModel)
