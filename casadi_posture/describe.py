@@ -1,0 +1,91 @@
+"""The resolved model of a problem as plain data (``casadi-posture describe``)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .problem import Problem
+
+
+def _zero_posture(problem: Problem, expression: ca.SX) -> list[float]:
+    value = ca.Function("f", [problem.body.q], [expression])(np.zeros(problem.body.n))
+    return [round(float(v), 12) for v in np.asarray(value).reshape(-1)]
+
+
+def description(problem: Problem) -> dict[str, Any]:
+    """DOFs, segments, landmarks, loads, half-joints, tasks, settings and parameters.
+
+    Positions are in the world frame at the zero posture [m], ranges in degrees.
+    """
+    body = problem.body
+    spec = problem.spec
+    return {
+        "problem": str(problem.path),
+        "title": spec.title,
+        "model": body.name,
+        "sex": spec.body.sex,
+        "stature_m": spec.body.stature_m,
+        "body_mass_kg": spec.body.mass_kg,
+        "gravity_m_s2": body.gravity,
+        "dofs": [
+            {
+                "name": d.name,
+                "parent": d.parent,
+                "origin_m": list(map(float, d.origin)),
+                "axis": [float(v) for v in body.axis(d.name)],
+                "range_deg": [math.degrees(d.lower), math.degrees(d.upper)],
+                "half_joints": {"positive": d.positive, "negative": d.negative},
+                "region": d.region,
+            }
+            for d in body.dofs
+        ],
+        "segments": [
+            {
+                "name": s.name,
+                "dof": s.dof,
+                "mass_kg": s.mass,
+                "com_m": list(map(float, s.com)),
+                "proximal": s.proximal,
+                "distal": s.distal,
+            }
+            for s in body.segments
+        ],
+        "landmarks": [
+            {"name": lm.name, "dof": lm.dof, "position_m": list(map(float, lm.position))}
+            for lm in body.landmarks.values()
+        ],
+        "loads": [
+            {
+                "name": load.name,
+                "at": load.at,
+                "point_m": _zero_posture(problem, body.landmark(load.at)),
+                "dof": body.landmarks[load.at].dof,
+                "mass_kg": load.mass,
+                "force_N": list(load.force),
+                "moment_Nm": list(load.moment),
+            }
+            for load in problem.loads
+        ],
+        "posture_deg": {
+            d.name: math.degrees(q) for d, q in zip(body.dofs, problem.posture, strict=True)
+        },
+        "tasks": [task.model_dump() for task in spec.tasks],
+        "fatigue": spec.fatigue.model_dump(),
+        "simulation": spec.simulation.model_dump(),
+        "solver": spec.solver.model_dump(),
+        "parameters": [
+            {
+                "name": p.name,
+                "value": p.value,
+                "unit": p.unit,
+                "status": p.status,
+                "evidence": p.evidence,
+                "source": p.source,
+            }
+            for p in problem.parameters
+        ],
+    }

@@ -1,0 +1,257 @@
+"""The command line: outputs, help examples, and every bad-input path (exit 2, one line)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from conftest import PROBLEMS
+
+from casadi_posture.cli import main
+
+GOOD = (PROBLEMS / "holding_m45.toml").read_text()
+
+
+def run(*args: str):
+    return CliRunner().invoke(main, list(args))
+
+
+def _bad(tmp_path: Path, text: str, *extra: str):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    return path, run(*(extra or ("validate",)), str(path))
+
+
+def test_every_shipped_problem_validates() -> None:
+    result = run("validate", *map(str, sorted(PROBLEMS.glob("*.toml"))))
+    assert result.exit_code == 0, result.output
+    assert result.stdout.count("ok ") == len(list(PROBLEMS.glob("*.toml")))
+
+
+@pytest.mark.parametrize("command", ["validate", "describe", "torques", "curve"])
+def test_help_shows_an_example(command: str) -> None:
+    result = run(command, "--help")
+    assert result.exit_code == 0
+    assert f"casadi-posture {command} problems/" in result.stdout
+
+
+def test_torques_json_and_table_agree() -> None:
+    path = str(PROBLEMS / "holding_m45.toml")
+    data = json.loads(run("torques", path, "--json").stdout)
+    assert [d["name"] for d in data["dofs"]] == ["shoulder_flexion", "elbow_flexion"]
+    flexors = data["half_joints"][0]
+    assert flexors["name"] == "shoulder_flexors"
+    assert flexors["load_pct_mvc"] == pytest.approx(
+        100 * flexors["torque_Nm"] / flexors["strength_Nm"]
+    )
+    assert data["half_joints"][1]["endurance_min"] is None
+    text = run("torques", path).stdout
+    assert "load (%MVC)" in text and "endurance (min)" in text and "active (N·m)" in text
+    assert f"{flexors['load_pct_mvc']:.2f}" in text
+
+
+def test_torques_posture_option_changes_the_posture() -> None:
+    path = str(PROBLEMS / "holding_m45.toml")
+    data = json.loads(
+        run(
+            "torques",
+            path,
+            "--json",
+            "--posture",
+            "shoulder_flexion=90",
+            "--posture",
+            "elbow_flexion=0",
+        ).stdout
+    )
+    assert data["dofs"][0]["angle_deg"] == pytest.approx(90.0)
+    assert data["dofs"][0]["external_Nm"] == pytest.approx(-24.06, abs=0.01)
+
+
+def test_describe_lists_model_and_parameter_sources() -> None:
+    data = json.loads(run("describe", str(PROBLEMS / "holding_m45.toml"), "--json").stdout)
+    assert data["dofs"][1]["parent"] == "shoulder_flexion"
+    assert data["dofs"][1]["origin_m"] == pytest.approx([0, 0, -0.2817])
+    assert data["loads"][0]["point_m"] == pytest.approx([0, 0, -0.2817 - 0.2689])
+    assert data["loads"][0]["dof"] == "elbow_flexion"
+    names = {p["name"]: p for p in data["parameters"]}
+    assert names["strength.elbow_flexors"]["status"] == "estimate"
+    assert names["segment.upper_arm.mass"]["status"] == "verified"
+    assert all(p["source"] and p["unit"] is not None for p in data["parameters"])
+    text = run("describe", str(PROBLEMS / "holding_m45.toml")).stdout
+    assert "de Leva" in text and "moved by DOF" in text
+
+
+def test_overrides_are_marked_as_user_values(tmp_path: Path) -> None:
+    text = GOOD.replace(
+        "[posture_deg]",
+        "[body.segments.forearm]\nmass_kg = 1.5\n\n"
+        "[body.half_joints.elbow_flexors]\nstrength_Nm = 55.0\n\n[posture_deg]",
+    )
+    path = tmp_path / "override.toml"
+    path.write_text(text)
+    data = json.loads(run("describe", str(path), "--json").stdout)
+    names = {p["name"]: p for p in data["parameters"]}
+    assert names["segment.forearm.mass"]["value"] == 1.5
+    assert names["segment.forearm.mass"]["status"] == "user"
+    assert names["strength.elbow_flexors"] == {
+        **names["strength.elbow_flexors"],
+        "value": 55.0,
+        "status": "user",
+    }
+
+
+def test_curve_prints_zeros_and_writes_the_figure(tmp_path: Path) -> None:
+    out = tmp_path / "fig3.png"
+    result = run(
+        "curve", str(PROBLEMS / "frontal_elbow.toml"), "--dof", "elbow_flexion", "--out", str(out)
+    )
+    assert result.exit_code == 0, result.output
+    assert out.stat().st_size > 10_000
+    assert result.stdout.count("near limit (passive)") == 2
+    assert result.stdout.count("mid-range (active)") == 1
+
+
+BAD_FILES = [
+    ("unknown top-level key", GOOD + "\ncolour = 'red'\n", "colour"),
+    (
+        "unknown nested key",
+        GOOD.replace("mass_kg = 73.0", "mass_kg = 73.0\nweight = 3"),
+        "body.weight",
+    ),
+    ("unknown task key", GOOD.replace("priority = 2", "priority = 2\nspeed = 1"), "tasks[1].speed"),
+    ("wrong type", GOOD.replace("stature_m = 1.741", 'stature_m = "tall"'), "body.stature_m"),
+    ("negative load mass", GOOD.replace("mass_kg = 2.5", "mass_kg = -2.5"), "loads[0].mass_kg"),
+    ("negative body mass", GOOD.replace("mass_kg = 73.0", "mass_kg = -73.0"), "body.mass_kg"),
+    (
+        "negative segment mass",
+        GOOD.replace("[posture_deg]", "[body.segments.hand]\nmass_kg = -1\n[posture_deg]"),
+        "body.segments.hand.mass_kg",
+    ),
+    (
+        "range min >= max",
+        GOOD.replace(
+            "[posture_deg]", "[body.dofs.elbow_flexion]\nrange_deg = [150.0, 0.0]\n[posture_deg]"
+        ),
+        "body.dofs.elbow_flexion.range_deg",
+    ),
+    (
+        "thresholds reversed",
+        GOOD.replace("recovery_threshold = 0.5", "recovery_threshold = 0.9"),
+        "fatigue",
+    ),
+    (
+        "threshold above 1",
+        GOOD.replace("fatigue_threshold = 0.8", "fatigue_threshold = 1.2"),
+        "fatigue.fatigue_threshold",
+    ),
+    (
+        "unknown DOF in posture",
+        GOOD.replace("elbow_flexion = 77.2878", "wrist_flexion = 10.0"),
+        "posture_deg.wrist_flexion",
+    ),
+    (
+        "unknown DOF override",
+        GOOD.replace("[posture_deg]", "[body.dofs.knee]\nrange_deg = [0.0, 1.0]\n[posture_deg]"),
+        "body.dofs.knee",
+    ),
+    (
+        "posture out of range",
+        GOOD.replace("elbow_flexion = 77.2878", "elbow_flexion = 170.0"),
+        "posture_deg.elbow_flexion",
+    ),
+    ("unknown model", GOOD.replace('model = "sagittal_arm"', 'model = "octopus"'), "body.model"),
+    (
+        "unknown endurance model",
+        GOOD.replace('endurance = "manenica"', 'endurance = "guess"'),
+        "fatigue.endurance",
+    ),
+    (
+        "unknown fatigue model",
+        GOOD.replace('model = "holding_time"', 'model = "magic"'),
+        "fatigue.model",
+    ),
+    (
+        "unknown strategy",
+        GOOD.replace('strategy = "active"', 'strategy = "lazy"'),
+        "fatigue.strategy",
+    ),
+    ("unknown task kind", GOOD.replace('kind = "position"', 'kind = "teleport"'), "tasks[1]"),
+    (
+        "unknown effector",
+        GOOD.replace('effector = "wrist"\npriority = 2', 'effector = "thumb"\npriority = 2'),
+        "tasks[1].effector",
+    ),
+    ("unknown load point", GOOD.replace('at = "wrist"', 'at = "pocket"'), "loads[0].at"),
+    (
+        "vector of 2",
+        GOOD.replace("target_m = [0.35, 0.0, -0.25]", "target_m = [0.35, 0.0]"),
+        "tasks[1].target_m",
+    ),
+    ("missing body", GOOD.replace("[body]", "[bodyy]"), "body"),
+    (
+        "unknown half-joint",
+        GOOD.replace(
+            "[posture_deg]", "[body.half_joints.toe_flexors]\nstrength_Nm = 5.0\n[posture_deg]"
+        ),
+        "body.half_joints.toe_flexors",
+    ),
+    ("zero priority", GOOD.replace("priority = 1", "priority = 0"), "tasks[0].priority"),
+]
+
+
+@pytest.mark.parametrize(("case", "text", "key"), BAD_FILES, ids=[c[0] for c in BAD_FILES])
+def test_bad_files_give_one_line_naming_the_key(
+    tmp_path: Path, case: str, text: str, key: str
+) -> None:
+    path, result = _bad(tmp_path, text)
+    assert result.exit_code == 2, (case, result.output)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert str(path) in lines[0] and key in lines[0] and "expected" in lines[0]
+    assert "Traceback" not in result.output
+
+
+def test_missing_and_malformed_files(tmp_path: Path) -> None:
+    missing = run("torques", str(tmp_path / "nope.toml"))
+    assert missing.exit_code == 2 and "nope.toml" in missing.stderr and "exist" in missing.stderr
+    _, result = _bad(tmp_path, "[body\nmodel = 1")
+    assert result.exit_code == 2 and "valid TOML" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--posture", "knee=10"], "--posture knee"),
+        (["--posture", "elbow_flexion"], "--posture"),
+        (["--posture", "elbow_flexion=abc"], "--posture"),
+        (["--posture", "elbow_flexion=200"], "--posture.elbow_flexion"),
+    ],
+)
+def test_bad_posture_option(args: list[str], needle: str) -> None:
+    result = run("torques", str(PROBLEMS / "holding_m45.toml"), *args)
+    assert result.exit_code == 2
+    assert len(result.stderr.strip().splitlines()) == 1 and needle in result.stderr
+
+
+def test_bad_dof_for_curve() -> None:
+    result = run("curve", str(PROBLEMS / "holding_m45.toml"), "--dof", "knee")
+    assert result.exit_code == 2 and "--dof = 'knee'" in result.stderr
+
+
+def test_console_script_exit_code_and_no_traceback(tmp_path: Path) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text(GOOD.replace("mass_kg = 2.5", "mass_kg = -1.0"))
+    done = subprocess.run(
+        [sys.executable, "-m", "casadi_posture.cli", "validate", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "loads[0].mass_kg = -1.0" in done.stderr
+    assert "Traceback" not in done.stderr

@@ -1,0 +1,48 @@
+"""Every ``$ casadi-posture ...`` example in the README prints what the README shows."""
+
+from __future__ import annotations
+
+import shlex
+import shutil
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from casadi_posture.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _examples() -> list[tuple[str, str]]:
+    examples, command, lines, in_block = [], None, [], False
+    for line in (ROOT / "README.md").read_text().splitlines():
+        if line.startswith("```console"):
+            in_block = True
+            continue
+        if in_block and (line.startswith("```") or line.startswith("$ ")):
+            if command is not None:
+                examples.append((command, "\n".join(lines)))
+            command, lines = None, []
+            if line.startswith("```"):
+                in_block = False
+                continue
+        if in_block and line.startswith("$ casadi-posture "):
+            command = line.removeprefix("$ casadi-posture ")
+        elif in_block and command is not None:
+            lines.append(line)
+    return examples
+
+
+@pytest.mark.parametrize(("command", "shown"), _examples(), ids=lambda v: v[:40])
+def test_readme_example_runs_as_shown(
+    command: str, shown: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    shutil.copytree(ROOT / "problems", tmp_path / "problems")
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(main, shlex.split(command))
+    assert result.output.rstrip() == shown.rstrip()
+
+
+def test_readme_has_examples() -> None:
+    assert len(_examples()) >= 3
