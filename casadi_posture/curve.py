@@ -9,8 +9,9 @@ import numpy as np
 
 from .torques import TorqueModel
 
-#: A zero of τa counts as "near a limit" (passive tissue carries the load) when the passive
-#: torque there exceeds this share of the largest external torque over the range.
+#: A zero of τa is "passive" (tissue near a limit carries the external torque, the paper's
+#: passive strategy) when τp there exceeds this share of the largest |τe| over the range;
+#: otherwise it is "active" (the external torque itself vanishes, as mid-range in Fig. 3).
 PASSIVE_SHARE = 0.05
 
 
@@ -63,7 +64,7 @@ def torque_curve(torques: TorqueModel, q: np.ndarray, dof: str, samples: int = 1
         posture[j] = angle
         passive = float(torques.function(posture, torques.default_loads)[1][j])
         kind = (
-            "near limit (passive)" if abs(passive) > PASSIVE_SHARE * scale else "mid-range (active)"
+            "passive: τp carries τe" if abs(passive) > PASSIVE_SHARE * scale else "active: τe ≈ 0"
         )
         zeros.append(ActiveZero(angle, passive, kind))
     return TorqueCurve(dof, angles, tau_e, tau_p, tau_a, tuple(zeros))

@@ -111,8 +111,8 @@ def test_curve_prints_zeros_and_writes_the_figure(tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.output
     assert out.stat().st_size > 10_000
-    assert result.stdout.count("near limit (passive)") == 2
-    assert result.stdout.count("mid-range (active)") == 1
+    assert result.stdout.count("passive: τp carries τe") == 2
+    assert result.stdout.count("active: τe ≈ 0") == 1
 
 
 BAD_FILES = [

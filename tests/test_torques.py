@@ -181,7 +181,7 @@ def test_frontal_elbow_by_hand_and_three_zero_active_postures() -> None:
         )
     curve = torque_curve(model, problem.posture, "elbow_flexion")
     kinds = [z.kind for z in curve.zeros]
-    assert kinds == ["near limit (passive)", "mid-range (active)", "near limit (passive)"]
+    assert kinds == ["passive: τp carries τe", "active: τe ≈ 0", "passive: τp carries τe"]
     assert math.degrees(curve.zeros[1].angle) == pytest.approx(90.0, abs=1.0)
     for zero in curve.zeros:
         assert model.evaluate([zero.angle]).active[0] == pytest.approx(0.0, abs=1e-9)
