@@ -11,7 +11,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
-from .body import BodyModel, Dof, Landmark, Segment
+from .body import BodyModel, Dof, Landmark, Segment, Vector3
 
 
 class SegmentGeometry(Protocol):
@@ -46,8 +46,56 @@ _SAGITTAL_FLEXION_AXIS = (0.0, -1.0, 0.0)
 _FRONTAL_FLEXION_AXIS = (-1.0, 0.0, 0.0)
 
 
-def _along(direction: tuple[float, float, float], distance: float) -> tuple[float, float, float]:
+def _along(direction: Vector3, distance: float) -> Vector3:
     return (direction[0] * distance, direction[1] * distance, direction[2] * distance)
+
+
+def _straight_arm(
+    segments: Mapping[str, SegmentGeometry],
+    direction: Vector3,
+    upper_arm_dof: str | None,
+    forearm_dof: str,
+) -> tuple[list[Segment], list[Landmark]]:
+    """Segments and landmarks of a straight right arm from the shoulder along ``direction``.
+
+    The upper arm and the elbow move with ``upper_arm_dof`` (``None``: fixed);
+    the forearm, wrist and hand with ``forearm_dof``.
+    """
+    ua, fa, hand = segments["upper_arm"], segments["forearm"], segments["hand"]
+    elbow, wrist = ua.length, ua.length + fa.length
+    body_segments = [
+        Segment(
+            "upper_arm",
+            upper_arm_dof,
+            ua.mass,
+            _along(direction, ua.com_distance),
+            "shoulder",
+            "elbow",
+        ),
+        Segment(
+            "forearm",
+            forearm_dof,
+            fa.mass,
+            _along(direction, elbow + fa.com_distance),
+            "elbow",
+            "wrist",
+        ),
+        Segment(
+            "hand",
+            forearm_dof,
+            hand.mass,
+            _along(direction, wrist + hand.com_distance),
+            "wrist",
+            "knuckles",
+        ),
+    ]
+    landmarks = [
+        Landmark("shoulder", None, (0.0, 0.0, 0.0)),
+        Landmark("elbow", upper_arm_dof, _along(direction, elbow)),
+        Landmark("wrist", forearm_dof, _along(direction, wrist)),
+        Landmark("knuckles", forearm_dof, _along(direction, wrist + hand.length)),
+    ]
+    return body_segments, landmarks
 
 
 def sagittal_arm(
@@ -61,8 +109,7 @@ def sagittal_arm(
     forward, elbow flexion bends the forearm forward/up; both axes point to
     the subject's right (-y).
     """
-    ua, fa, hand = segments["upper_arm"], segments["forearm"], segments["hand"]
-    elbow, wrist = ua.length, ua.length + fa.length
+    elbow = _along(_DOWN, segments["upper_arm"].length)
     dofs = [
         Dof(
             "shoulder_flexion",
@@ -77,7 +124,7 @@ def sagittal_arm(
         Dof(
             "elbow_flexion",
             "shoulder_flexion",
-            _along(_DOWN, elbow),
+            elbow,
             _SAGITTAL_FLEXION_AXIS,
             *ranges["elbow_flexion"],
             "elbow",
@@ -85,38 +132,7 @@ def sagittal_arm(
             "elbow_extensors",
         ),
     ]
-    body_segments = [
-        Segment(
-            "upper_arm",
-            "shoulder_flexion",
-            ua.mass,
-            _along(_DOWN, ua.com_distance),
-            "shoulder",
-            "elbow",
-        ),
-        Segment(
-            "forearm",
-            "elbow_flexion",
-            fa.mass,
-            _along(_DOWN, elbow + fa.com_distance),
-            "elbow",
-            "wrist",
-        ),
-        Segment(
-            "hand",
-            "elbow_flexion",
-            hand.mass,
-            _along(_DOWN, wrist + hand.com_distance),
-            "wrist",
-            "knuckles",
-        ),
-    ]
-    landmarks = [
-        Landmark("shoulder", None, (0.0, 0.0, 0.0)),
-        Landmark("elbow", "shoulder_flexion", _along(_DOWN, elbow)),
-        Landmark("wrist", "elbow_flexion", _along(_DOWN, wrist)),
-        Landmark("knuckles", "elbow_flexion", _along(_DOWN, wrist + hand.length)),
-    ]
+    body_segments, landmarks = _straight_arm(segments, _DOWN, "shoulder_flexion", "elbow_flexion")
     return BodyModel("sagittal_arm", dofs, body_segments, landmarks, gravity=gravity)
 
 
@@ -131,13 +147,12 @@ def frontal_elbow(
     Zero posture: elbow straight, forearm horizontal pointing right (-y).
     Elbow flexion raises the forearm (axis -x); at 90° it points straight up.
     """
-    ua, fa, hand = segments["upper_arm"], segments["forearm"], segments["hand"]
-    elbow, wrist = ua.length, ua.length + fa.length
+    elbow = _along(_RIGHT, segments["upper_arm"].length)
     dofs = [
         Dof(
             "elbow_flexion",
             None,
-            _along(_RIGHT, elbow),
+            elbow,
             _FRONTAL_FLEXION_AXIS,
             *ranges["elbow_flexion"],
             "elbow",
@@ -145,31 +160,7 @@ def frontal_elbow(
             "elbow_extensors",
         ),
     ]
-    body_segments = [
-        Segment("upper_arm", None, ua.mass, _along(_RIGHT, ua.com_distance), "shoulder", "elbow"),
-        Segment(
-            "forearm",
-            "elbow_flexion",
-            fa.mass,
-            _along(_RIGHT, elbow + fa.com_distance),
-            "elbow",
-            "wrist",
-        ),
-        Segment(
-            "hand",
-            "elbow_flexion",
-            hand.mass,
-            _along(_RIGHT, wrist + hand.com_distance),
-            "wrist",
-            "knuckles",
-        ),
-    ]
-    landmarks = [
-        Landmark("shoulder", None, (0.0, 0.0, 0.0)),
-        Landmark("elbow", None, _along(_RIGHT, elbow)),
-        Landmark("wrist", "elbow_flexion", _along(_RIGHT, wrist)),
-        Landmark("knuckles", "elbow_flexion", _along(_RIGHT, wrist + hand.length)),
-    ]
+    body_segments, landmarks = _straight_arm(segments, _RIGHT, None, "elbow_flexion")
     return BodyModel("frontal_elbow", dofs, body_segments, landmarks, gravity=gravity)
 
 
