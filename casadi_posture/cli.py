@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import sys
@@ -12,12 +13,14 @@ import click
 import numpy as np
 
 from . import __version__
+from .compare import compare, rows
 from .curve import torque_curve
 from .describe import description
 from .endurance import endurance_model
 from .errors import CasadiPostureError, ProblemError
 from .problem import Problem, load_problem
 from .report import table
+from .solvers import SOLVER_NAMES, make_solver
 
 
 class _Commands(click.Group):
@@ -189,10 +192,27 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
           --posture elbow_flexion=0 --json
     """
     resolved = _problem(problem, postures)
-    result = resolved.torque_model().evaluate(resolved.posture)
+    dofs, groups = _torque_breakdown(resolved, resolved.posture)
     model_name = resolved.spec.fatigue.endurance
-    endurance = endurance_model(model_name)
-    body = resolved.body
+    if as_json:
+        _emit_json(
+            {
+                "problem": problem,
+                "endurance_model": model_name,
+                "dofs": dofs,
+                "half_joints": _json_groups(groups),
+            }
+        )
+        return
+    click.echo(f"{problem} ({resolved.body.name}); endurance model: {model_name}\n")
+    _echo_torques(dofs, groups)
+
+
+def _torque_breakdown(problem: Problem, q: np.ndarray) -> tuple[list[dict], list[dict]]:
+    """Per DOF the torques [N·m] and per half-joint its strength, load and endurance at ``q``."""
+    result = problem.torque_model().evaluate(q)
+    endurance = endurance_model(problem.spec.fatigue.endurance)
+    body = problem.body
     groups = []
     for k, half in enumerate(body.half_joints):
         load = float(result.load_pct_mvc[k])
@@ -221,15 +241,18 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
         }
         for i, d in enumerate(body.dofs)
     ]
-    if as_json:
-        for group in groups:
-            if math.isinf(group["endurance_min"]):
-                group["endurance_min"] = None
-        _emit_json(
-            {"problem": problem, "endurance_model": model_name, "dofs": dofs, "half_joints": groups}
-        )
-        return
-    click.echo(f"{problem} ({body.name}); endurance model: {model_name}\n")
+    return dofs, groups
+
+
+def _json_groups(groups: list[dict]) -> list[dict]:
+    """Half-joint rows for JSON: an unlimited endurance is null."""
+    return [
+        {**g, "endurance_min": None if math.isinf(g["endurance_min"]) else g["endurance_min"]}
+        for g in groups
+    ]
+
+
+def _echo_torques(dofs: list[dict], groups: list[dict]) -> None:
     click.echo(
         table(
             ["DOF", "angle (deg)", "external (N·m)", "passive (N·m)", "active (N·m)"],
@@ -251,6 +274,144 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
             digits=2,
         )
     )
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--solver",
+    type=click.Choice(SOLVER_NAMES),
+    default=None,
+    help="IK solver [default: the file's solver.name].",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+def solve(problem: str, solver: str | None, as_json: bool) -> None:
+    """Solve the prioritized IK of a problem from its posture_deg; print the posture,
+    the residual of each priority level, the active constraints and the torques there.
+
+    Exits with code 1 when the solver fails (its status is printed).
+
+    \b
+    Example:
+      casadi-posture solve problems/line_plane_hysteresis.toml
+      casadi-posture solve problems/line_plane_hysteresis.toml --solver nullspace --json
+    """
+    resolved = _problem(problem)
+    hierarchy = resolved.hierarchy()
+    name = solver or resolved.spec.solver.name
+    result = make_solver(name, hierarchy, resolved.spec.solver).solve(resolved.posture)
+    dofs, groups = _torque_breakdown(resolved, result.q)
+    levels = [
+        {"level": k + 1, "tasks": tasks, "residual": float(result.residuals[k]), "unit": unit}
+        for k, (tasks, unit) in enumerate(
+            zip(hierarchy.level_names(), hierarchy.level_units(), strict=True)
+        )
+    ]
+    if as_json:
+        _emit_json(
+            {
+                "problem": problem,
+                "solver": name,
+                "status": result.status,
+                "success": result.success,
+                "iterations": result.iterations,
+                "wall_time_s": result.wall_time_s,
+                "posture_deg": {d["name"]: d["angle_deg"] for d in dofs},
+                "levels": levels,
+                "at_limits": list(result.at_limits),
+                "inequality_active": result.inequality_active,
+                "torques": {"dofs": dofs, "half_joints": _json_groups(groups)},
+            }
+        )
+    else:
+        click.echo(
+            f"{problem}: {name}, status {result.status}, {result.iterations} iterations, "
+            f"{1e3 * result.wall_time_s:.2f} ms\n"
+        )
+        click.echo(
+            table(
+                ["level", "tasks", "residual", "unit"],
+                [[lv["level"], lv["tasks"], f"{lv['residual']:.3g}", lv["unit"]] for lv in levels],
+            )
+        )
+        limits = ", ".join(result.at_limits) or "none"
+        click.echo(f"\njoints at a limit: {limits}\n")
+        _echo_torques(dofs, groups)
+    if not result.success:
+        raise SystemExit(1)
+
+
+@main.command(name="compare")
+@click.argument("problems", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Folder for compare.csv.",
+)
+def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
+    """Solve each problem with both IK solvers from the same start and compare them:
+    residual per level, largest joint difference, wall time, status, and a verdict
+    that says why they disagree (an unreachable target, two posture families).
+
+    Problems without tasks are skipped. Exits with code 1 when any problem disagrees.
+
+    \b
+    Example:
+      casadi-posture compare problems/*.toml --out out/compare
+    """
+    table_rows: list[dict[str, object]] = []
+    disagreements = 0
+    for path in problems:
+        resolved = _problem(path)
+        if not resolved.tasks:
+            click.echo(f"skipped {path}: no tasks")
+            continue
+        comparison = compare(resolved)
+        disagreements += not comparison.agree
+        table_rows += rows(comparison)
+    headers = [
+        "problem",
+        "level",
+        "tasks",
+        "unit",
+        "residual nullspace",
+        "residual lexicographic",
+        "max joint diff (deg)",
+        "time nullspace (ms)",
+        "time lexicographic (ms)",
+        "verdict",
+    ]
+    click.echo(
+        table(
+            headers,
+            [
+                [
+                    r["problem"],
+                    r["level"],
+                    r["tasks"],
+                    r["unit"],
+                    f"{r['residual_nullspace']:.3g}",
+                    f"{r['residual_lexicographic']:.3g}",
+                    f"{r['max_joint_difference_deg']:.2g}",
+                    r["time_nullspace_ms"],
+                    r["time_lexicographic_ms"],
+                    r["verdict"],
+                ]
+                for r in table_rows
+            ],
+            digits=2,
+        )
+    )
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        with (out / "compare.csv").open("w", newline="", encoding="utf-8") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(table_rows[0]) if table_rows else [])
+            writer.writeheader()
+            writer.writerows(table_rows)
+        click.echo(f"\nwritten: {out / 'compare.csv'}")
+    if disagreements:
+        raise SystemExit(1)
 
 
 @main.command()

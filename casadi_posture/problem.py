@@ -19,6 +19,7 @@ from .body import BodyModel
 from .endurance import endurance_model
 from .errors import MISSING, ProblemError
 from .fatigue import fatigue_model
+from .hierarchy import TaskHierarchy
 from .loads import Load
 from .models import MODELS
 from .parameters import Parameter
@@ -33,6 +34,7 @@ from .schema import (
     Task,
 )
 from .strength import ConstantStrength, Strength, TabulatedStrength, default_strength
+from .tasks import tasks_from_specs
 from .torques import TorqueModel
 
 
@@ -52,6 +54,10 @@ class Problem:
     @property
     def tasks(self) -> list[Task]:
         return list(self.spec.tasks)
+
+    def hierarchy(self) -> TaskHierarchy:
+        """The problem's tasks grouped into priority levels (built once per call)."""
+        return TaskHierarchy(self.body, tasks_from_specs(self.spec.tasks, self.body))
 
     def torque_model(self) -> TorqueModel:
         """The compiled torque functions of this problem (build once, evaluate many)."""

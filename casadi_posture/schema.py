@@ -212,9 +212,18 @@ class SimulationSpec(Strict):
 
 
 class SolverSpec(Strict):
+    """IK solver and its options; an option left out takes the solver's own default."""
+
     name: Literal["nullspace", "lexicographic"] = "lexicographic"
-    max_iterations: Annotated[int, Field(ge=1)] = 200
-    tolerance: Positive = 1e-8
+    max_iterations: Annotated[int, Field(ge=1)] | None = None
+    tolerance: Positive | None = None
+    damping: NonNegative | None = None
+
+    @model_validator(mode="after")
+    def _damping(self) -> SolverSpec:
+        if self.damping is not None and self.name != "nullspace":
+            raise ValueError("damping only with name = 'nullspace'")
+        return self
 
 
 class ProblemSpec(Strict):

@@ -1,0 +1,89 @@
+"""Tasks grouped into strict priority levels, with every residual and Jacobian in one
+compiled CasADi call; and the linear inequality ``aᵀq ≤ b`` that sits above them."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .body import BodyModel
+from .errors import ProblemError
+from .tasks import Task
+
+
+@dataclass(frozen=True)
+class Inequality:
+    """The hard constraint aᵀq ≤ b (q [rad]); ``a`` is normalised by the caller if wanted."""
+
+    a: np.ndarray
+    b: float
+
+    def violation(self, q: np.ndarray) -> float:
+        """max(0, aᵀq - b)."""
+        return max(0.0, float(self.a @ q - self.b))
+
+
+class TaskHierarchy:
+    """Priority levels of tasks on one body.
+
+    ``levels[k]`` lists the tasks of level k+1 (tasks sharing a priority are
+    stacked); ``residuals[k]`` and ``jacobians[k]`` are their SX expressions in
+    ``body.q`` and the target vector ``p``; ``function(q, p)`` returns
+    ``e_1, …, e_L, J_1, …, J_L`` in one call.
+    """
+
+    def __init__(self, body: BodyModel, tasks: Sequence[Task]) -> None:
+        if not tasks:
+            raise ProblemError(None, "tasks", [], "at least one task to solve")
+        self.body = body
+        priorities = sorted({t.priority for t in tasks})
+        self.priorities = priorities
+        self.levels = [[t for t in tasks if t.priority == p] for p in priorities]
+        values = [t.targets() for level in self.levels for t in level]
+        self.targets = np.concatenate(values) if values else np.zeros(0)
+        self.p = ca.SX.sym("targets", self.targets.size)
+        self.residuals: list[ca.SX] = []
+        self.blocks: list[list[tuple[Task, slice]]] = []
+        offset = 0
+        for level in self.levels:
+            parts, blocks, row = [], [], 0
+            for task in level:
+                size = task.targets().size
+                e = task.residual(body, self.p[offset : offset + size])
+                offset += size
+                parts.append(e)
+                blocks.append((task, slice(row, row + e.numel())))
+                row += e.numel()
+            self.residuals.append(ca.vertcat(*parts))
+            self.blocks.append(blocks)
+        self.jacobians = [ca.jacobian(e, body.q) for e in self.residuals]
+        self.sizes = [e.numel() for e in self.residuals]
+        self.function = ca.Function(
+            "levels",
+            [body.q, self.p],
+            self.residuals + self.jacobians,
+            ["q", "targets"],
+            [f"e{k + 1}" for k in range(len(self.levels))]
+            + [f"J{k + 1}" for k in range(len(self.levels))],
+        )
+
+    @property
+    def depth(self) -> int:
+        """Number of priority levels."""
+        return len(self.levels)
+
+    def level_names(self) -> list[str]:
+        """'+'-joined task names of each level."""
+        return ["+".join(t.name for t in level) for level in self.levels]
+
+    def level_units(self) -> list[str]:
+        """Unit of each level's residual: 'm', 'rad' or 'm, rad' for a mixed level."""
+        return [", ".join(sorted({t.unit for t in level}, reverse=True)) for level in self.levels]
+
+    def residual_norms(self, q: np.ndarray) -> np.ndarray:
+        """‖e_k(q)‖ of every level (task units)."""
+        out = self.function(q, self.targets)
+        return np.array([float(ca.norm_2(out[k])) for k in range(self.depth)])

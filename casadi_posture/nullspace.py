@@ -1,0 +1,163 @@
+"""The paper's IK solver: strict priorities by nullspace projection (Baerlocher & Boulic 2004;
+SPEC §4.1; ik-solvers §1).
+
+One iteration, compiled as a single CasADi function:
+
+    J̃_k = J_k P_{k-1}
+    Δq_k = Δq_{k-1} + J̃_k^{+λ_k} (Δx_k - J_k Δq_{k-1})      damped, in the step only
+    P_k  = P_{k-1} - J̃_k⁺ J̃_k                                undamped, rank-thresholded
+
+with Δx_k = -e_k clamped per task (``Task.step_limit``). Joint limits: joints
+that would leave their range are clamped to the limit, removed from P_0, and
+the sweep is recomputed; the inequality aᵀq ≤ b, while the step would violate
+it, becomes the highest-priority equality aᵀΔq = b - aᵀq. The passes of that
+loop are unrolled (n + 2 suffice: each pass clamps a joint or activates the
+inequality, or changes nothing). J̃⁺J̃ is the projector on the row space of J̃,
+built by Gram-Schmidt with re-orthogonalisation, rows whose remainder is below
+``rank_tolerance`` dropped.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .hierarchy import Inequality, TaskHierarchy
+from .ik import IKResult, active_constraints
+
+_TINY = 1e-300
+
+
+@dataclass(frozen=True)
+class NullspaceOptions:
+    """Settings of the nullspace-projection solver.
+
+    ``damping`` λ per task level [task units] (one value for all levels, or one per
+    level); ``rank_tolerance`` [task units per rad]; iterate until the largest joint
+    step is below ``tolerance`` [rad] or ``max_iterations`` is reached.
+    """
+
+    damping: float | tuple[float, ...] = 1e-3
+    rank_tolerance: float = 1e-9
+    tolerance: float = 1e-12
+    max_iterations: int = 1000
+    limit_slack: float = 1e-12
+
+
+def _row_projector(jt: ca.SX, tolerance: float) -> ca.SX:
+    """Orthogonal projector on the row space of ``jt`` (rank-thresholded Gram-Schmidt)."""
+    n = jt.size2()
+    basis: list[ca.SX] = []
+    projector = ca.SX.zeros(n, n)
+    for i in range(jt.size1()):
+        v = jt[i, :].T
+        for _ in range(2):
+            for u in basis:
+                v = v - ca.dot(u, v) * u
+        norm = ca.norm_2(v)
+        u = ca.if_else(norm > tolerance, v / ca.fmax(norm, _TINY), ca.SX.zeros(n))
+        basis.append(u)
+        projector += u @ u.T
+    return projector
+
+
+def _clamped_errors(hierarchy: TaskHierarchy, level: int) -> ca.SX:
+    parts = []
+    for task, rows in hierarchy.blocks[level]:
+        e = hierarchy.residuals[level][rows]
+        scale = ca.fmin(1.0, task.step_limit / ca.fmax(ca.norm_2(e), _TINY))
+        parts.append(-scale * e)
+    return ca.vertcat(*parts)
+
+
+class NullspaceSolver:
+    """Prioritized IK by nullspace projection on a task hierarchy; build once, solve often."""
+
+    name = "nullspace"
+
+    def __init__(self, hierarchy: TaskHierarchy, options: NullspaceOptions | None = None) -> None:
+        self.hierarchy = hierarchy
+        self.options = options or NullspaceOptions()
+        self.iteration = self._build()
+
+    def _damping(self, level: int) -> float:
+        d = self.options.damping
+        return d if isinstance(d, float | int) else d[level]
+
+    def _build(self) -> ca.Function:
+        h, body, opts = self.hierarchy, self.hierarchy.body, self.options
+        n, q = body.n, body.q
+        lower, upper = ca.DM(body.lower), ca.DM(body.upper)
+        a, b, use = ca.SX.sym("a", n), ca.SX.sym("b"), ca.SX.sym("use_inequality")
+        task_levels = [
+            (h.jacobians[k], _clamped_errors(h, k), self._damping(k)) for k in range(h.depth)
+        ]
+        at_lower, at_upper, active = ca.SX.zeros(n), ca.SX.zeros(n), ca.SX(0)
+        for _ in range(n + 2):
+            free = 1 - at_lower - at_upper
+            projector = ca.diag(free)
+            dq = at_lower * (lower - q) + at_upper * (upper - q)
+            hard = (active * a.T, active * (b - ca.dot(a, q)), 1e-9)
+            for jac, dx, damping in [hard, *task_levels]:
+                jt = jac @ projector
+                gram = jt @ jt.T + damping**2 * ca.SX.eye(jac.size1())
+                dq += jt.T @ ca.solve(gram, dx - jac @ dq)
+                projector -= _row_projector(jt, opts.rank_tolerance)
+            q_next = q + dq
+            below = free * ca.if_else(q_next < lower - opts.limit_slack, 1, 0)
+            above = free * ca.if_else(q_next > upper + opts.limit_slack, 1, 0)
+            at_lower, at_upper = at_lower + below, at_upper + above
+            violated = ca.if_else(ca.dot(a, q_next) > b + opts.limit_slack, 1, 0)
+            active = ca.fmax(active, use * violated)
+        q_next = ca.fmin(ca.fmax(q + dq, lower), upper)
+        step = ca.mmax(ca.fabs(q_next - q))
+        packed = ca.vertcat(q, h.p, a, b, use)
+        return ca.Function(
+            "nullspace_iteration",
+            [packed],
+            [ca.vertcat(q_next, step)],
+            ["q_targets_a_b_use"],
+            ["q_next_step"],
+        )
+
+    def solve(
+        self,
+        q0: np.ndarray,
+        inequality: Inequality | None = None,
+        *,
+        max_iterations: int | None = None,
+    ) -> IKResult:
+        """Iterate from ``q0`` [rad] until the largest joint step is below the tolerance."""
+        start = time.perf_counter()
+        h, body = self.hierarchy, self.hierarchy.body
+        a = np.zeros(body.n) if inequality is None else np.asarray(inequality.a, dtype=float)
+        b = 0.0 if inequality is None else float(inequality.b)
+        use = 0.0 if inequality is None else 1.0
+        limit = max_iterations or self.options.max_iterations
+        packed = np.concatenate([np.clip(q0, body.lower, body.upper), h.targets, a, [b, use]])
+        n = body.n
+        status, iterations = "max_iterations", 0
+        while iterations < limit:
+            iterations += 1
+            out = self.iteration(packed).full().ravel()
+            packed[:n] = out[:n]
+            if out[n] < self.options.tolerance:
+                status = "converged"
+                break
+        q = packed[:n].copy()
+        at_limits, active = active_constraints(body, q, inequality)
+        hard_ok = inequality is None or inequality.violation(q) <= 1e-9
+        return IKResult(
+            solver=self.name,
+            q=q,
+            residuals=h.residual_norms(q),
+            iterations=iterations,
+            status=status if hard_ok else f"{status}; inequality violated",
+            success=status == "converged" and hard_ok,
+            at_limits=at_limits,
+            inequality_active=active,
+            wall_time_s=time.perf_counter() - start,
+        )

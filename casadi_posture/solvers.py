@@ -1,0 +1,43 @@
+"""The two IK solvers by name, configured from a problem file's ``[solver]`` table."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Protocol
+
+import numpy as np
+
+from .hierarchy import Inequality, TaskHierarchy
+from .ik import IKResult
+from .lexicographic import LexicographicOptions, LexicographicSolver
+from .nullspace import NullspaceOptions, NullspaceSolver
+from .schema import SolverSpec
+
+SOLVER_NAMES = ("nullspace", "lexicographic")
+
+
+class Solver(Protocol):
+    name: str
+    hierarchy: TaskHierarchy
+
+    def solve(self, q0: np.ndarray, inequality: Inequality | None = None) -> IKResult: ...
+
+
+def make_solver(name: str, hierarchy: TaskHierarchy, spec: SolverSpec | None = None) -> Solver:
+    """Build solver ``name`` on ``hierarchy``; options from ``spec`` apply when its name matches."""
+    given = {}
+    if spec is not None and spec.name == name:
+        given = {
+            k: v
+            for k, v in (
+                ("max_iterations", spec.max_iterations),
+                ("tolerance", spec.tolerance),
+                ("damping", spec.damping),
+            )
+            if v is not None
+        }
+    if name == "nullspace":
+        return NullspaceSolver(hierarchy, replace(NullspaceOptions(), **given))
+    if name == "lexicographic":
+        return LexicographicSolver(hierarchy, replace(LexicographicOptions(), **given))
+    raise ValueError(f"unknown solver {name!r}")

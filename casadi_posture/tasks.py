@@ -1,0 +1,214 @@
+"""IK tasks: data plus a CasADi residual e(q, p), zero when the task is achieved (SPEC §4).
+
+A task knows nothing of the solvers. Its targets are CasADi parameters ``p``
+(so a solver is built once and the targets change freely); its geometry
+(directions, normals, axes) is fixed data. ``step_limit`` bounds the task error
+a linearised solver may try to remove in one iteration, in the task's units.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .body import BodyModel
+from .schema import (
+    ComTask,
+    LineTask,
+    OrientationTask,
+    PlaneTask,
+    PositionTask,
+    PostureTask,
+)
+from .schema import Task as TaskSpec
+
+#: Largest task error removed per linearised iteration: 0.1 m (Buss's error clamping,
+#: ik-solvers §1.3) and 0.3 rad for angular tasks.
+CARTESIAN_STEP = 0.1
+ANGULAR_STEP = 0.3
+
+
+@dataclass(frozen=True)
+class Task:
+    """Base of all tasks: a name and a priority level (1 = highest)."""
+
+    name: str
+    priority: int
+
+    step_limit = CARTESIAN_STEP
+    unit = "m"
+
+    def targets(self) -> np.ndarray:
+        """Numeric values of the task's parameters."""
+        raise NotImplementedError
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        """Residual e(q, p) as a column; ``p`` holds :meth:`targets`."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Position(Task):
+    """Effector at a point: e = x(q) - target [m]."""
+
+    effector: str
+    target: tuple[float, float, float]
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.target, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        return body.landmark(self.effector) - p
+
+
+@dataclass(frozen=True)
+class Line(Task):
+    """Effector on a line through ``point`` along ``direction``: the offset from the line in
+    an orthonormal basis of the plane normal to it (2 rows) [m]."""
+
+    effector: str
+    point: tuple[float, float, float]
+    direction: tuple[float, float, float]
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.point, dtype=float)
+
+    def normal_basis(self) -> np.ndarray:
+        """2×3 orthonormal rows spanning the plane normal to the line."""
+        d = np.asarray(self.direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        helper = np.eye(3)[int(np.argmin(np.abs(d)))]
+        n1 = helper - helper.dot(d) * d
+        n1 /= np.linalg.norm(n1)
+        return np.vstack([n1, np.cross(d, n1)])
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        return ca.DM(self.normal_basis()) @ (body.landmark(self.effector) - p)
+
+
+@dataclass(frozen=True)
+class Plane(Task):
+    """Effector on a plane through ``point`` with ``normal``: signed distance [m]."""
+
+    effector: str
+    point: tuple[float, float, float]
+    normal: tuple[float, float, float]
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.point, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        n = np.asarray(self.normal, dtype=float)
+        return ca.DM(n / np.linalg.norm(n)).T @ (body.landmark(self.effector) - p)
+
+
+@dataclass(frozen=True)
+class Orientation(Task):
+    """Frame of a segment at a target orientation: e = ½·vee(Rtᵀ R - Rᵀ Rt), which is
+    sin(angle)·axis of the error rotation [rad-like], zero at R = Rt."""
+
+    segment: str
+    dof: str | None
+    rotation: tuple[float, ...]
+
+    step_limit = ANGULAR_STEP
+    unit = "rad"
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.rotation, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        target = ca.reshape(p, 3, 3)
+        r = body.rotation(self.dof)
+        skew = 0.5 * (target.T @ r - r.T @ target)
+        return ca.vertcat(skew[2, 1], skew[0, 2], skew[1, 0])
+
+
+@dataclass(frozen=True)
+class CentreOfMass(Task):
+    """Whole-body centre of mass over a target in the listed world axes [m] (balance)."""
+
+    target: tuple[float, float, float]
+    axes: str
+
+    def targets(self) -> np.ndarray:
+        return np.array([self.target["xyz".index(a)] for a in self.axes], dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        com = body.com()
+        return ca.vertcat(*[com["xyz".index(a)] for a in self.axes]) - p
+
+
+@dataclass(frozen=True)
+class JointReference(Task):
+    """Joints at reference angles: e = q[dofs] - reference [rad]."""
+
+    dofs: tuple[str, ...]
+    reference: tuple[float, ...]
+
+    step_limit = ANGULAR_STEP
+    unit = "rad"
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.reference, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        return ca.vertcat(*[body.q[body.index[d]] for d in self.dofs]) - p
+
+
+def rotation_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rz(yaw)·Ry(pitch)·Rx(roll) [rad]."""
+    cr, sr, cp, sp, cy, sy = (f(a) for a in (roll, pitch, yaw) for f in (math.cos, math.sin))
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def line_direction(spec: LineTask) -> tuple[float, float, float]:
+    """The direction of a line task, from ``direction`` or elevation/azimuth [deg]."""
+    if spec.direction is not None:
+        return tuple(spec.direction)
+    el, az = math.radians(spec.elevation_deg), math.radians(spec.azimuth_deg or 0.0)
+    return (math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
+
+
+def task_from_spec(spec: TaskSpec, body: BodyModel) -> Task:
+    """The task object of a validated problem-file task."""
+    base = {"name": spec.name, "priority": spec.priority}
+    if isinstance(spec, PositionTask):
+        return Position(**base, effector=spec.effector, target=tuple(spec.target_m))
+    if isinstance(spec, LineTask):
+        return Line(
+            **base,
+            effector=spec.effector,
+            point=tuple(spec.point_m),
+            direction=line_direction(spec),
+        )
+    if isinstance(spec, PlaneTask):
+        return Plane(
+            **base, effector=spec.effector, point=tuple(spec.point_m), normal=tuple(spec.normal)
+        )
+    if isinstance(spec, OrientationTask):
+        dof = next(s.dof for s in body.segments if s.name == spec.segment)
+        rotation = rotation_rpy(*np.radians(spec.target_rpy_deg))
+        return Orientation(
+            **base, segment=spec.segment, dof=dof, rotation=tuple(rotation.ravel(order="F"))
+        )
+    if isinstance(spec, ComTask):
+        return CentreOfMass(**base, target=tuple(spec.target_m), axes=spec.axes)
+    if isinstance(spec, PostureTask):
+        return JointReference(
+            **base,
+            dofs=tuple(spec.reference_deg),
+            reference=tuple(math.radians(v) for v in spec.reference_deg.values()),
+        )
+    raise TypeError(f"unknown task spec {type(spec).__name__}")
+
+
+def tasks_from_specs(specs: Sequence[TaskSpec], body: BodyModel) -> list[Task]:
+    return [task_from_spec(s, body) for s in specs]
