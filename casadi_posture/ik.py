@@ -21,7 +21,8 @@ class IKResult:
     ``q`` [rad]; ``residuals`` ‖e_k‖ per priority level (task units);
     ``iterations`` solver iterations in all (IPOPT iterations summed over the
     levels for the lexicographic solver); ``status`` the solver's own word;
-    ``success`` False whenever the solver failed or a re-check did not pass.
+    ``success`` False whenever the solver failed or a re-check did not pass;
+    ``subproblems`` the NLPs solved (lexicographic; 0 for the nullspace solver).
     """
 
     solver: str
@@ -33,6 +34,7 @@ class IKResult:
     at_limits: tuple[str, ...]
     inequality_active: bool
     wall_time_s: float
+    subproblems: int = 0
 
 
 def active_constraints(

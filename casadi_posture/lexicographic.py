@@ -103,7 +103,7 @@ class LexicographicSolver:
         b = np.inf if inequality is None else float(inequality.b)
         q_prev = np.clip(np.asarray(q0, dtype=float), body.lower, body.upper)
         q, kept, bounds = q_prev.copy(), [], []
-        iterations, status, success = 0, "Solve_Succeeded", True
+        iterations, solved, status, success = 0, 0, "Solve_Succeeded", True
         redundant = True
         for k, solver in enumerate(self.levels):
             if k == h.depth and not redundant:
@@ -116,6 +116,7 @@ class LexicographicSolver:
             ubg = np.concatenate([[b], *[hi for _, hi in bounds]])
             out = solver(x0=q, p=p, lbx=body.lower, ubx=body.upper, lbg=lbg, ubg=ubg)
             stats = solver.stats()
+            solved = k + 1
             iterations += int(stats.get("iter_count", 0))
             q = np.asarray(out["x"]).reshape(-1)
             problem = self._check(q, np.asarray(out["g"]).reshape(-1), lbg, ubg)
@@ -141,6 +142,7 @@ class LexicographicSolver:
             at_limits,
             active,
             time.perf_counter() - start,
+            solved,
         )
 
     def _check(self, q: np.ndarray, g: np.ndarray, lbg: np.ndarray, ubg: np.ndarray) -> str:

@@ -32,7 +32,9 @@ def test_every_shipped_problem_validates() -> None:
     assert result.stdout.count("ok ") == len(list(PROBLEMS.glob("*.toml")))
 
 
-@pytest.mark.parametrize("command", ["validate", "describe", "torques", "curve"])
+@pytest.mark.parametrize(
+    "command", ["validate", "describe", "torques", "curve", "solve", "compare"]
+)
 def test_help_shows_an_example(command: str) -> None:
     result = run(command, "--help")
     assert result.exit_code == 0
