@@ -21,6 +21,15 @@ def run(*args: str):
     return CliRunner().invoke(main, list(args))
 
 
+def _variant(tmp_path: Path, old: str, new: str) -> Path:
+    """The -45° holding problem with ``old`` replaced by ``new``, written to ``tmp_path``."""
+    text = (PROBLEMS / "holding_m45.toml").read_text()
+    assert old in text
+    path = tmp_path / "variant.toml"
+    path.write_text(text.replace(old, new))
+    return path
+
+
 @pytest.mark.parametrize("path", WITH_TASKS, ids=lambda p: p.stem)
 def test_shipped_problems_agree(path: Path) -> None:
     comparison = compare(load_problem(path))
@@ -47,13 +56,7 @@ def test_compare_writes_csv_and_skips_problems_without_tasks(tmp_path: Path) -> 
 
 
 def test_compare_explains_an_unreachable_target(tmp_path: Path) -> None:
-    text = (
-        (PROBLEMS / "holding_m45.toml")
-        .read_text()
-        .replace("target_m = [0.35, 0.0, -0.25]", "target_m = [0.35, 0.0, -0.95]")
-    )
-    path = tmp_path / "far.toml"
-    path.write_text(text)
+    path = _variant(tmp_path, "target_m = [0.35, 0.0, -0.25]", "target_m = [0.35, 0.0, -0.95]")
     comparison = compare(load_problem(path))
     assert "unreachable" in comparison.verdict
     assert comparison.nullspace.residuals[1] > 0.1
@@ -73,25 +76,15 @@ def test_solve_prints_posture_residuals_and_torques(solver: str) -> None:
 
 
 def test_solve_failure_exits_1_with_status(tmp_path: Path) -> None:
-    text = (
-        (PROBLEMS / "holding_m45.toml")
-        .read_text()
-        .replace('name = "lexicographic"', 'name = "lexicographic"\nmax_iterations = 1')
+    path = _variant(
+        tmp_path, 'name = "lexicographic"', 'name = "lexicographic"\nmax_iterations = 1'
     )
-    path = tmp_path / "short.toml"
-    path.write_text(text)
     result = run("solve", str(path))
     assert result.exit_code == 1
     assert "Maximum_Iterations_Exceeded" in result.stdout
 
 
 def test_solver_options_are_validated(tmp_path: Path) -> None:
-    text = (
-        (PROBLEMS / "holding_m45.toml")
-        .read_text()
-        .replace('name = "lexicographic"', 'name = "lexicographic"\ndamping = 0.01')
-    )
-    path = tmp_path / "bad.toml"
-    path.write_text(text)
+    path = _variant(tmp_path, 'name = "lexicographic"', 'name = "lexicographic"\ndamping = 0.01')
     result = run("validate", str(path))
     assert result.exit_code == 2 and "damping only with name = 'nullspace'" in result.stderr
