@@ -1,0 +1,178 @@
+"""The reduced active torque algorithm: the goal angle of the fatigued joint (paper Tables 1–2;
+SPEC §6).
+
+Only local knowledge of the external torque is used: along joint l,
+``τe(θ) ≈ τe + dτe·(θ - θc)``, so the extrapolated active torque is
+
+    τa(θ) = -(τp(θ) + τe + dτe·(θ - θc)).
+
+Slope matching finds the angles where ``dτp(θ) = -dτe``, the extrema of the
+extrapolated τa: none, one, or two (``θs_min < θs_max``); τa has a local
+maximum at θs_min and a local minimum at θs_max, and decreases between them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+Strategy = Literal["active", "passive"]
+Curve = Callable[[np.ndarray], np.ndarray]
+
+#: Grid of the slope search and the bisection tolerance [rad].
+SLOPE_GRID = 2001
+ANGLE_TOLERANCE = 1e-10
+
+
+@dataclass(frozen=True)
+class JointState:
+    """What the algorithm knows of joint l at the current angle ``angle`` θc [rad].
+
+    ``external`` τe [N·m] and ``external_slope`` dτe = ∂τe_l/∂q_l [N·m/rad] at θc;
+    ``passive`` τp(θ) and ``passive_slope`` dτp(θ), vectorised [N·m, N·m/rad];
+    ``lower``/``upper`` the range [rad].
+    """
+
+    angle: float
+    external: float
+    external_slope: float
+    passive: Curve
+    passive_slope: Curve
+    lower: float
+    upper: float
+
+    def active(self, theta: np.ndarray | float) -> np.ndarray:
+        """The extrapolated active torque τa(θ) [N·m]."""
+        theta = np.asarray(theta, dtype=float)
+        line = self.external + self.external_slope * (theta - self.angle)
+        return -(self.passive(theta) + line)
+
+
+@dataclass(frozen=True)
+class Goal:
+    """The goal angle θg [rad], the case of Table 1 that gave it, and the slope angles."""
+
+    angle: float
+    case: str
+    slopes: tuple[float, ...]
+
+
+def slope_angles(joint: JointState) -> tuple[float, ...]:
+    """Angles in range where dτp(θ) = -dτe, found on a grid and refined by bisection."""
+    grid = np.linspace(joint.lower, joint.upper, SLOPE_GRID)
+
+    def mismatch(theta: np.ndarray | float) -> np.ndarray:
+        return joint.passive_slope(np.asarray(theta, dtype=float)) + joint.external_slope
+
+    values = mismatch(grid)
+    sign = np.sign(values)
+    roots = [float(grid[k]) for k in np.flatnonzero(sign == 0)]
+    roots += [
+        _bisect(mismatch, grid[k], grid[k + 1]) for k in np.flatnonzero(sign[:-1] * sign[1:] < 0)
+    ]
+    roots.sort()
+    return (roots[0], roots[-1]) if len(roots) > 2 else tuple(roots)
+
+
+def dichotomy(joint: JointState, lo: float, hi: float) -> float:
+    """A zero of the extrapolated τa on [lo, hi] by bisection; without a sign change, the
+    end with the smaller |τa|. Never fails and never leaves [lo, hi]."""
+    f_lo, f_hi = float(joint.active(lo)), float(joint.active(hi))
+    if f_lo == 0.0:
+        return lo
+    if f_hi == 0.0:
+        return hi
+    if np.sign(f_lo) == np.sign(f_hi):
+        return lo if abs(f_lo) <= abs(f_hi) else hi
+    return _bisect(joint.active, lo, hi)
+
+
+def goal_angle(joint: JointState, strategy: Strategy, *, r_min: float, epsilon: float) -> Goal:
+    """The goal angle of joint l (paper Table 1), never worse than staying at θc.
+
+    ``r_min`` is the minimum acceptable active-torque decrease ratio R_min;
+    ``epsilon`` ε_τ [N·m] the tolerance under which τa counts as zero.
+    """
+    slopes = slope_angles(joint)
+    angle, case = _table_1(joint, slopes, strategy, r_min, epsilon)
+    if abs(float(joint.active(angle))) > abs(float(joint.active(joint.angle))):
+        angle, case = joint.angle, case + " (kept θc: no reduction)"
+    return Goal(float(angle), case, slopes)
+
+
+def _table_1(
+    joint: JointState, slopes: tuple[float, ...], strategy: Strategy, r_min: float, epsilon: float
+) -> tuple[float, str]:
+    c = joint.angle
+    ta = float(joint.active(c))
+    if len(slopes) < 2:
+        if abs(ta) < epsilon:
+            return c, "1.1"
+        case = "1.2" if ta > epsilon else "1.3"
+        return dichotomy(joint, *_opposite_side(joint, ta, case)), case
+    s_min, s_max = slopes
+    ta_min, ta_max = float(joint.active(s_min)), float(joint.active(s_max))
+    if abs(ta) < epsilon:
+        outside_same_sign = (c < s_min or c > s_max) and np.sign(ta_min) == np.sign(ta_max)
+        if s_min < c < s_max or outside_same_sign:
+            return c, "2.1"
+        if strategy == "active":
+            return dichotomy(joint, s_min, s_max), "2.2"
+        return c, "2.3"
+    if np.sign(ta) == np.sign(ta_min) == np.sign(ta_max):
+        best = s_max if ta > 0 else s_min
+        ratio = (ta - float(joint.active(best))) / ta
+        if strategy == "active" and ratio > r_min:
+            return best, "3.1"
+        return dichotomy(joint, *_same_sign_interval(joint, ta, epsilon, slopes)), "3.2"
+    if strategy == "active":
+        return dichotomy(joint, s_min, s_max), "3.3"
+    return dichotomy(joint, *_opposite_sign_interval(joint, ta, epsilon, slopes)), "3.4"
+
+
+def _opposite_side(joint: JointState, ta: float, case: str) -> tuple[float, float]:
+    """Cases 1.2/1.3: the side of θc whose end has the sign opposite to τa. The paper assumes
+    τa increases (1.2 searches below θc, 1.3 above); where it decreases, the other side."""
+    c = joint.angle
+    if np.sign(float(joint.active(joint.lower))) != np.sign(ta):
+        return joint.lower, c
+    if np.sign(float(joint.active(joint.upper))) != np.sign(ta):
+        return c, joint.upper
+    return (joint.lower, c) if case == "1.2" else (c, joint.upper)
+
+
+def _same_sign_interval(
+    joint: JointState, ta: float, epsilon: float, slopes: tuple[float, ...]
+) -> tuple[float, float]:
+    """SameSignMinandMax (Table 2), the interval of DSS: the passive zero near a limit."""
+    s_min, s_max = slopes
+    return (joint.lower, s_min) if ta > epsilon else (s_max, joint.upper)
+
+
+def _opposite_sign_interval(
+    joint: JointState, ta: float, epsilon: float, slopes: tuple[float, ...]
+) -> tuple[float, float]:
+    """OppoSignMinandMax (Table 2), the interval of DOS: the zero on θc's side of the
+    mid-range, near a limit."""
+    s_min, s_max = slopes
+    c = joint.angle
+    if ta > epsilon:
+        return (joint.lower, s_min) if c < s_max else (s_max, joint.upper)
+    return (s_max, joint.upper) if c > s_min else (joint.lower, s_min)
+
+
+def _bisect(f: Callable[[float], float | np.ndarray], lo: float, hi: float) -> float:
+    f_lo = float(f(lo))
+    while hi - lo > ANGLE_TOLERANCE:
+        mid = 0.5 * (lo + hi)
+        f_mid = float(f(mid))
+        if f_mid == 0.0:
+            return mid
+        if np.sign(f_mid) == np.sign(f_lo):
+            lo, f_lo = mid, f_mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
