@@ -45,7 +45,7 @@ def torque_curve(torques: TorqueModel, q: np.ndarray, dof: str, samples: int = 1
     postures[j] = angles
     loads = np.repeat(torques.default_loads[:, None], samples, axis=1)
     batch = torques.function.map(samples)
-    tau_e, tau_p, tau_a, _ = (np.asarray(v)[j] for v in batch(postures, loads))
+    tau_e, tau_p, tau_a = (np.asarray(v)[j] for v in batch(postures, loads)[:3])
 
     def active(angle: float) -> float:
         posture = np.array(q, dtype=float)

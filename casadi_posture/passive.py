@@ -6,12 +6,17 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import casadi as ca
+import numpy as np
 
 
 class PassiveTorque(Protocol):
-    """τp(q_j) [N·m] of one DOF, monotonically decreasing in its angle q_j [rad]."""
+    """τp(q_j) [N·m] of one DOF, monotonically decreasing in its angle q_j [rad]: a CasADi
+    expression for the torque functions, and numpy values with the slope dτp/dq_j
+    [N·m/rad] for the reduced active torque algorithm (SPEC §6)."""
 
     def expression(self, q: ca.SX) -> ca.SX: ...
+
+    def numeric(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True)
@@ -30,9 +35,13 @@ class ExponentialPassive:
     q2: float
 
     def expression(self, q: ca.SX) -> ca.SX:
-        return self.k1 * ca.exp(-self.k2 * (q - self.q1)) - self.k3 * ca.exp(
-            -self.k4 * (self.q2 - q)
-        )
+        low = self.k1 * ca.exp(-self.k2 * (q - self.q1))
+        return low - self.k3 * ca.exp(-self.k4 * (self.q2 - q))
+
+    def numeric(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        low = self.k1 * np.exp(-self.k2 * (q - self.q1))
+        high = self.k3 * np.exp(-self.k4 * (self.q2 - q))
+        return low - high, -self.k2 * low - self.k4 * high
 
 
 @dataclass(frozen=True)
@@ -41,3 +50,7 @@ class NoPassive:
 
     def expression(self, q: ca.SX) -> ca.SX:
         return ca.SX(0.0)
+
+    def numeric(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        zero = np.zeros_like(np.asarray(q, dtype=float))
+        return zero, zero

@@ -22,8 +22,8 @@ import numpy as np
 Strategy = Literal["active", "passive"]
 Curve = Callable[[np.ndarray], np.ndarray]
 
-#: Grid of the slope search and the bisection tolerance [rad].
-SLOPE_GRID = 2001
+#: Grid of the slope search and the tolerance of every root [rad].
+SLOPE_GRID = 401
 ANGLE_TOLERANCE = 1e-10
 
 
@@ -71,15 +71,15 @@ def slope_angles(joint: JointState) -> tuple[float, ...]:
     sign = np.sign(values)
     roots = [float(grid[k]) for k in np.flatnonzero(sign == 0)]
     roots += [
-        _bisect(mismatch, grid[k], grid[k + 1]) for k in np.flatnonzero(sign[:-1] * sign[1:] < 0)
+        _root(mismatch, grid[k], grid[k + 1]) for k in np.flatnonzero(sign[:-1] * sign[1:] < 0)
     ]
     roots.sort()
     return (roots[0], roots[-1]) if len(roots) > 2 else tuple(roots)
 
 
 def dichotomy(joint: JointState, lo: float, hi: float) -> float:
-    """A zero of the extrapolated τa on [lo, hi] by bisection; without a sign change, the
-    end with the smaller |τa|. Never fails and never leaves [lo, hi]."""
+    """A zero of the extrapolated τa on [lo, hi] by a bracketing search; without a sign
+    change, the end with the smaller |τa|. Never fails and never leaves [lo, hi]."""
     f_lo, f_hi = float(joint.active(lo)), float(joint.active(hi))
     if f_lo == 0.0:
         return lo
@@ -87,7 +87,7 @@ def dichotomy(joint: JointState, lo: float, hi: float) -> float:
         return hi
     if np.sign(f_lo) == np.sign(f_hi):
         return lo if abs(f_lo) <= abs(f_hi) else hi
-    return _bisect(joint.active, lo, hi)
+    return _root(joint.active, lo, hi)
 
 
 def goal_angle(joint: JointState, strategy: Strategy, *, r_min: float, epsilon: float) -> Goal:
@@ -164,15 +164,25 @@ def _opposite_sign_interval(
     return (s_max, joint.upper) if c > s_min else (joint.lower, s_min)
 
 
-def _bisect(f: Callable[[float], float | np.ndarray], lo: float, hi: float) -> float:
-    f_lo = float(f(lo))
+def _root(f: Callable[[float], float | np.ndarray], lo: float, hi: float) -> float:
+    """A root of ``f`` on [lo, hi], where f changes sign: regula falsi with the Illinois
+    modification (the bracket is kept, as in bisection, and convergence is superlinear)."""
+    f_lo, f_hi = float(f(lo)), float(f(hi))
+    side = 0
     while hi - lo > ANGLE_TOLERANCE:
-        mid = 0.5 * (lo + hi)
+        mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        mid = min(max(mid, lo), hi)
         f_mid = float(f(mid))
         if f_mid == 0.0:
             return mid
         if np.sign(f_mid) == np.sign(f_lo):
             lo, f_lo = mid, f_mid
+            f_hi = f_hi / 2 if side == -1 else f_hi
+            side = -1
         else:
-            hi = mid
+            hi, f_hi = mid, f_mid
+            f_lo = f_lo / 2 if side == 1 else f_lo
+            side = 1
+        if abs(f_mid) < 1e-14:
+            return mid
     return 0.5 * (lo + hi)

@@ -24,7 +24,8 @@ from .strength import Strength
 @dataclass(frozen=True)
 class Torques:
     """Torques at one posture; per DOF arrays [N·m], per half-joint arrays in
-    ``BodyModel.half_joints`` order (positive group of each DOF first)."""
+    ``BodyModel.half_joints`` order (positive group of each DOF first), and
+    ``external_jacobian[i, j] = ∂τe_i/∂q_j`` [N·m/rad] (paper eq. 12) by AD."""
 
     q: np.ndarray
     external: np.ndarray
@@ -32,6 +33,7 @@ class Torques:
     active: np.ndarray
     strength: np.ndarray
     half_joint_torque: np.ndarray
+    external_jacobian: np.ndarray
 
     @property
     def load_pct_mvc(self) -> np.ndarray:
@@ -42,7 +44,7 @@ class Torques:
 class TorqueModel:
     """The torque functions of one body with its loads, compiled once.
 
-    ``function(q, loads) -> (tau_ext, tau_pas, tau_act, strength)`` with ``loads``
+    ``function(q, loads) -> (tau_ext, tau_pas, tau_act, strength, dtau_ext)`` with ``loads``
     the vector of :func:`casadi_posture.loads.pack`, so load masses and forces
     can change without rebuilding anything.
     """
@@ -68,9 +70,9 @@ class TorqueModel:
         self.function = ca.Function(
             "torques",
             [q, p],
-            [self.tau_ext, self.tau_pas, self.tau_act, self.strength],
+            [self.tau_ext, self.tau_pas, self.tau_act, self.strength, ca.jacobian(self.tau_ext, q)],
             ["q", "loads"],
-            ["tau_ext", "tau_pas", "tau_act", "strength"],
+            ["tau_ext", "tau_pas", "tau_act", "strength", "dtau_ext"],
         )
         self.default_loads = pack(self.loads)
 
@@ -92,8 +94,11 @@ class TorqueModel:
     def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
         """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own."""
         p = self.default_loads if loads is None else loads
-        tau_e, tau_p, tau_a, st = (np.asarray(v).reshape(-1) for v in self.function(q, p))
+        out = self.function(q, p)
+        tau_e, tau_p, tau_a, st = (np.asarray(v).reshape(-1) for v in out[:4])
         carried = np.empty(2 * self.body.n)
         carried[0::2] = np.maximum(tau_a, 0.0)
         carried[1::2] = np.maximum(-tau_a, 0.0)
-        return Torques(np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried)
+        return Torques(
+            np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried, np.asarray(out[4])
+        )

@@ -185,3 +185,33 @@ def test_frontal_elbow_by_hand_and_three_zero_active_postures() -> None:
     assert math.degrees(curve.zeros[1].angle) == pytest.approx(90.0, abs=1.0)
     for zero in curve.zeros:
         assert model.evaluate([zero.angle]).active[0] == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("dof", ["shoulder_flexion", "elbow_flexion"])
+def test_numeric_passive_torque_and_slope_match_casadi_ad(dof: str) -> None:
+    problem = _arm()
+    model = problem.passive[dof]
+    q = ca.SX.sym("q")
+    expr = model.expression(q)
+    f = ca.Function("tp", [q], [expr, ca.jacobian(expr, q)])
+    angles = np.linspace(
+        problem.body.lower[problem.body.index[dof]], problem.body.upper[problem.body.index[dof]], 7
+    )
+    value, slope = model.numeric(angles)
+    for k, angle in enumerate(angles):
+        expected = [float(v) for v in f(angle)]
+        assert [value[k], slope[k]] == pytest.approx(expected, rel=1e-12, abs=1e-12)
+
+
+def test_external_torque_jacobian_matches_finite_differences() -> None:
+    problem = _arm()
+    model = problem.torque_model()
+    q = np.radians([30.0, 60.0])
+    h = 1e-6
+    fd = np.column_stack(
+        [
+            (model.evaluate(q + h * e).external - model.evaluate(q - h * e).external) / (2 * h)
+            for e in np.eye(2)
+        ]
+    )
+    assert model.evaluate(q).external_jacobian == pytest.approx(fd, abs=1e-7)
