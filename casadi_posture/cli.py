@@ -44,8 +44,10 @@ def main() -> None:
     """
 
 
-def _problem(path: str, postures: tuple[str, ...] = ()) -> Problem:
-    problem = load_problem(path)
+def _problem(
+    path: str, postures: tuple[str, ...] = (), overrides: dict[str, dict[str, Any]] | None = None
+) -> Problem:
+    problem = load_problem(path, overrides)
     if postures:
         problem = problem.with_posture(_parse_postures(postures))
     return problem
@@ -412,6 +414,116 @@ def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
         click.echo(f"\nwritten: {out / 'compare.csv'}")
     if disagreements:
         raise SystemExit(1)
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--solver",
+    type=click.Choice(SOLVER_NAMES),
+    default=None,
+    help="IK solver [default: the file's solver.name].",
+)
+@click.option(
+    "--strategy",
+    type=click.Choice(["active", "passive"]),
+    default=None,
+    help="Recovery strategy [default: the file's fatigue.strategy].",
+)
+@click.option(
+    "--r-min",
+    "r_min",
+    type=float,
+    default=None,
+    help="Minimum acceptable active-torque decrease ratio R_min (0-1).",
+)
+@click.option("--duration", type=float, default=None, help="Simulated time in s.")
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: out/simulate/<problem>-<strategy>-<solver>].",
+)
+def simulate(
+    problem: str,
+    solver: str | None,
+    strategy: str | None,
+    r_min: float | None,
+    duration: float | None,
+    out: Path | None,
+) -> None:
+    """Simulate holding the tasks over time: fatigue, the fatigue-reducing constraint with
+    its hysteresis, recovery. Writes timeline.csv, events.csv, summary.json,
+    manifest.json and figures into the output folder.
+
+    \b
+    Example:
+      casadi-posture simulate problems/holding_m45.toml --strategy passive
+      casadi-posture simulate problems/line_plane_hysteresis.toml --solver nullspace \\
+          --duration 600 --out out/hysteresis
+    """
+    from .plots import plot_simulation
+    from .results import summary, write_results
+    from .simulation import simulate as run
+
+    fatigue = {k: v for k, v in (("strategy", strategy), ("r_min", r_min)) if v is not None}
+    overrides = {
+        "fatigue": fatigue,
+        "simulation": {} if duration is None else {"duration_s": duration},
+    }
+    resolved = _problem(problem, overrides=overrides)
+    result = run(resolved, solver)
+    out = out or Path(
+        "out", "simulate", f"{Path(problem).stem}-{result.settings.strategy}-{result.solver}"
+    )
+    files = write_results(result, out) + plot_simulation(result, out)
+    report = summary(result)
+    stats = report["solver_statistics"]
+    click.echo(
+        f"{problem}: {report['simulated_s']:.0f} s simulated, {result.solver} solver, "
+        f"{report['strategy']} strategy; {stats['wall_time_s']:.2f} s wall, "
+        f"{100 * (1 - stats['share_outside_ik']):.0f} % in IK, "
+        f"{stats['ik_failures']} IK failures\n"
+    )
+    click.echo(
+        table(
+            [
+                "half-joint",
+                "initial load (%MVC)",
+                "initial endurance (min)",
+                "first at fatigue threshold (s)",
+                "max fatigue",
+            ],
+            [
+                [
+                    g["half_joint"],
+                    g["initial_load_pct_mvc"],
+                    g["initial_endurance_min"],
+                    g["first_fatigue_threshold_s"],
+                    g["max_fatigue"],
+                ]
+                for g in report["half_joints"]
+            ],
+            digits=2,
+        )
+    )
+    first = report["first_to_fatigue"]
+    click.echo(
+        f"\nfirst to fatigue: {first['half_joint']} at {first['time_s']:.0f} s"
+        if first
+        else "\nfirst to fatigue: none"
+    )
+    click.echo(f"fatigue/recovery cycles: {report['fatigue_recovery_cycles']}")
+    for rec in report["recovery_postures"]:
+        posture = ", ".join(f"{k} {v:.1f}°" for k, v in rec["posture_deg"].items())
+        click.echo(f"  recovered at {rec['time_s']:.0f} s: {posture}")
+    lost = report["task_lost"]
+    click.echo(
+        f"task could no longer be held at {lost['time_s']:.0f} s ({lost['half_joint']} exhausted)"
+        if lost
+        else "task held to the end"
+    )
+    click.echo("files: " + ", ".join(str(f) for f in files))
 
 
 @main.command()

@@ -72,8 +72,12 @@ class Problem:
         return replace(self, posture=q)
 
 
-def load_problem(path: str | Path) -> Problem:
-    """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`."""
+def load_problem(path: str | Path, overrides: dict[str, dict[str, Any]] | None = None) -> Problem:
+    """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`.
+
+    ``overrides`` replaces keys of the file's tables before validation, e.g.
+    ``{"fatigue": {"strategy": "passive"}}`` (what command-line options set).
+    """
     path = Path(path)
     try:
         raw = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -85,6 +89,8 @@ def load_problem(path: str | Path) -> Problem:
         raise ProblemError(path, None, None, f"a readable UTF-8 file ({error})") from None
     except tomllib.TOMLDecodeError as error:
         raise ProblemError(path, None, None, f"valid TOML ({error})") from None
+    for table, values in (overrides or {}).items():
+        raw[table] = {**raw.get(table, {}), **values}
     try:
         spec = ProblemSpec.model_validate(raw)
     except ValidationError as error:

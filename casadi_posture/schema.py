@@ -185,6 +185,10 @@ class FatigueSpec(Strict):
     strategy: Literal["active", "passive"] = "active"
     r_min: Annotated[float, Field(ge=0, le=1)] = 0.9
     load_threshold_pct_mvc: Annotated[float, Field(ge=0, le=100)] | None = None
+    epsilon_Nm: Positive = 0.05
+    beta: Annotated[float, Field(gt=0, lt=1)] = 0.5
+    max_step_deg: Positive = 1.0
+    alpha_rad_per_Nm2: Annotated[float, Field(lt=0)] = -1e-4
 
     @model_validator(mode="after")
     def _thresholds(self) -> FatigueSpec:

@@ -1,0 +1,131 @@
+"""The fatigue-reducing constraint (paper §5; SPEC §5): hysteresis per half-joint, one owner,
+and the hyperplane aᵀq ≤ b that moves the owner's joint toward a less tiring angle.
+
+While half-joint ``l`` owns the constraint, each step:
+
+    Δq_l = clamp(β·(θg - θc), ±Δq_max)                θg from the reduced active torque algorithm
+    Δq_j = α·∂h/∂q_j,  h = τe_l(q)²,  α < 0            the other joints reduce the external torque
+    a = -Δq/‖Δq‖,  b = aᵀ(q + Δq)                      (paper eqs 9-11)
+
+The current posture violates aᵀq ≤ b by ‖Δq‖; the IK solvers move it across. When
+the goal is reached (Δq = 0) the last direction is kept with b = aᵀq, so lower
+tasks cannot pull the posture back before the owner recovers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .body import BodyModel
+from .hierarchy import Inequality
+from .passive import PassiveTorque
+from .reduced_torque import Goal, JointState, Strategy, goal_angle
+from .torques import Torques
+
+EventKind = Literal[
+    "fatigue_threshold",
+    "recovery_threshold",
+    "constraint_on",
+    "constraint_off",
+    "task_not_held",
+    "exhausted",
+]
+
+
+@dataclass(frozen=True)
+class ConstraintSettings:
+    """Thresholds (fatigue levels), strategy, R_min, ε_τ [N·m], β, Δq_max [rad], α
+    [rad/(N·m)²] of the fatigue-reducing constraint."""
+
+    fatigue_threshold: float = 0.8
+    recovery_threshold: float = 0.5
+    strategy: Strategy = "active"
+    r_min: float = 0.9
+    epsilon: float = 0.05
+    beta: float = 0.5
+    max_step: float = math.radians(1.0)
+    alpha: float = -1e-4
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something that happened at ``time_s`` [s] to a half-joint (or the task)."""
+
+    time_s: float
+    kind: EventKind
+    half_joint: str
+    detail: str = ""
+
+
+@dataclass
+class FatigueConstraint:
+    """Hysteresis states of every half-joint and the one constraint they may own."""
+
+    body: BodyModel
+    passive: dict[str, PassiveTorque]
+    settings: ConstraintSettings
+    fatigued: np.ndarray = field(init=False)
+    owner: int | None = field(init=False, default=None)
+    _crossed_at: np.ndarray = field(init=False)
+    _direction: np.ndarray | None = field(init=False, default=None)
+
+    def __post_init__(self) -> None:
+        count = len(self.body.half_joints)
+        self.fatigued = np.zeros(count, dtype=bool)
+        self._crossed_at = np.full(count, np.inf)
+
+    def update(self, levels: np.ndarray, time_s: float) -> list[Event]:
+        """Apply the hysteresis to the fatigue ``levels`` and hand over the constraint."""
+        s, names = self.settings, [h.name for h in self.body.half_joints]
+        events = []
+        for k in np.flatnonzero(~self.fatigued & (levels >= s.fatigue_threshold)):
+            self.fatigued[k], self._crossed_at[k] = True, time_s
+            events.append(Event(time_s, "fatigue_threshold", names[k], f"fatigue {levels[k]:.3f}"))
+        for k in np.flatnonzero(self.fatigued & (levels <= s.recovery_threshold)):
+            self.fatigued[k], self._crossed_at[k] = False, np.inf
+            events.append(Event(time_s, "recovery_threshold", names[k], f"fatigue {levels[k]:.3f}"))
+        if self.owner is not None and not self.fatigued[self.owner]:
+            events.append(Event(time_s, "constraint_off", names[self.owner]))
+            self.owner, self._direction = None, None
+        if self.owner is None and self.fatigued.any():
+            self.owner = int(np.argmin(self._crossed_at))
+            events.append(
+                Event(
+                    time_s,
+                    "constraint_on",
+                    names[self.owner],
+                    f"{s.strategy} strategy on {self.body.half_joints[self.owner].dof}",
+                )
+            )
+        return events
+
+    def hyperplane(self, q: np.ndarray, torques: Torques) -> tuple[Inequality, Goal] | None:
+        """The constraint aᵀq ≤ b for the next step and the goal of the owner's joint."""
+        if self.owner is None:
+            return None
+        s = self.settings
+        j = self.body.half_joints[self.owner].dof_index
+        dof = self.body.dofs[j]
+        curve = self.passive[dof.name].numeric
+        joint = JointState(
+            float(q[j]),
+            float(torques.external[j]),
+            float(torques.external_jacobian[j, j]),
+            lambda theta: curve(theta)[0],
+            lambda theta: curve(theta)[1],
+            dof.lower,
+            dof.upper,
+        )
+        goal = goal_angle(joint, s.strategy, r_min=s.r_min, epsilon=s.epsilon)
+        dq = s.alpha * 2.0 * torques.external[j] * torques.external_jacobian[j]
+        dq[j] = np.clip(s.beta * (goal.angle - q[j]), -s.max_step, s.max_step)
+        norm = float(np.linalg.norm(dq))
+        if norm > 1e-12:
+            self._direction = -dq / norm
+        elif self._direction is None:
+            return None
+        return Inequality(self._direction, float(self._direction @ (q + dq))), goal

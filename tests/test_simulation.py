@@ -1,0 +1,175 @@
+"""The time simulation, the fatigue constraint and the simulate command."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import PROBLEMS
+
+from casadi_posture.cli import main
+from casadi_posture.fatigue_constraint import ConstraintSettings, FatigueConstraint
+from casadi_posture.problem import load_problem
+from casadi_posture.simulation import simulate
+
+
+def _holding(duration: float = 240.0, **fatigue):
+    return load_problem(
+        PROBLEMS / "holding_m45.toml", {"simulation": {"duration_s": duration}, "fatigue": fatigue}
+    )
+
+
+@pytest.fixture(scope="module")
+def both_solvers():
+    problem = _holding()
+    return {name: simulate(problem, name) for name in ("nullspace", "lexicographic")}
+
+
+def test_fatigue_before_the_threshold_is_holding_time_over_endurance(both_solvers) -> None:
+    """Paper eq. 7: at a constant posture F(t) = t / mht(T_N), mht from Manenica (eq. 6)."""
+    tl = both_solvers["lexicographic"].timeline
+    load = tl.load[0, 0]
+    mht_s = 60 * math.exp(2.70 - 0.0448 * load)
+    k = int(np.searchsorted(tl.time, 100.0))
+    assert tl.fatigue[k, 0] == pytest.approx(100.0 / mht_s, rel=1e-9)
+    first = int(np.argmax(tl.fatigue[:, 0] >= 0.8))
+    assert tl.time[first] == math.ceil(0.8 * mht_s)
+
+
+def test_both_solvers_give_the_same_events_and_fatigue(both_solvers) -> None:
+    ns, lx = both_solvers["nullspace"], both_solvers["lexicographic"]
+    ns_events = sorted((e.kind, e.half_joint, e.time_s) for e in ns.events)
+    lx_events = sorted((e.kind, e.half_joint, e.time_s) for e in lx.events)
+    assert [e[:2] for e in ns_events] == [e[:2] for e in lx_events]
+    for a, b in zip(ns_events, lx_events, strict=True):
+        assert abs(a[2] - b[2]) <= 2.0, (a, b)
+    shared = min(ns.timeline.time.size, lx.timeline.time.size) - 3
+    assert np.max(np.abs(ns.timeline.fatigue[:shared] - lx.timeline.fatigue[:shared])) < 0.02
+    assert np.max(np.abs(np.degrees(ns.timeline.q[:shared] - lx.timeline.q[:shared]))) < 0.5
+
+
+def test_the_constraint_keeps_the_top_task_and_moves_the_owner_joint(both_solvers) -> None:
+    result = both_solvers["lexicographic"]
+    tl = result.timeline
+    on = next(e for e in result.events if e.kind == "constraint_on")
+    assert on.half_joint == "shoulder_flexors"
+    k = int(np.searchsorted(tl.time, on.time_s))
+    assert np.all(tl.residuals[k : k + 20, 0] < 1e-6)
+    assert np.all(np.diff(tl.q[k : k + 20, 0]) < 0)
+    assert np.all(np.abs(np.diff(tl.q[k + 1 : k + 20, 0])) <= math.radians(1.0) + 1e-9)
+    assert tl.active[k + 20, 0] < tl.active[k, 0]
+
+
+def _constraint(problem):
+    settings = ConstraintSettings(fatigue_threshold=0.8, recovery_threshold=0.5)
+    return FatigueConstraint(problem.body, problem.passive, settings)
+
+
+def test_hysteresis_and_a_single_owner() -> None:
+    constraint = _constraint(_holding())
+    assert constraint.update(np.array([0.79, 0, 0.5, 0]), 1.0) == []
+    events = constraint.update(np.array([0.81, 0, 0.5, 0]), 2.0)
+    assert [e.kind for e in events] == ["fatigue_threshold", "constraint_on"]
+    assert constraint.owner == 0
+    events = constraint.update(np.array([0.7, 0, 0.85, 0]), 3.0)
+    assert [e.kind for e in events] == ["fatigue_threshold"] and constraint.owner == 0
+    assert constraint.update(np.array([0.51, 0, 0.85, 0]), 4.0) == []
+    events = constraint.update(np.array([0.5, 0, 0.85, 0]), 5.0)
+    assert [e.kind for e in events] == ["recovery_threshold", "constraint_off", "constraint_on"]
+    assert constraint.owner == 2 and events[-1].half_joint == "elbow_flexors"
+
+
+def test_the_hyperplane_is_violated_by_the_step_and_points_to_the_goal() -> None:
+    problem = _holding()
+    constraint = _constraint(problem)
+    constraint.update(np.array([0.9, 0, 0, 0]), 0.0)
+    q = problem.posture
+    torques = problem.torque_model().evaluate(q)
+    inequality, goal = constraint.hyperplane(q, torques)
+    assert np.linalg.norm(inequality.a) == pytest.approx(1.0)
+    violation = float(inequality.a @ q - inequality.b)
+    assert 0 < violation <= math.hypot(math.radians(1.0), 1.0)
+    step_on_owner = -inequality.a[0] * violation
+    assert np.sign(step_on_owner) == np.sign(goal.angle - q[0])
+    other = -inequality.a[1] * violation
+    expected = -1e-4 * 2 * torques.external[0] * torques.external_jacobian[0, 1]
+    assert other == pytest.approx(expected, rel=1e-9)
+
+
+def test_recovery_releases_the_constraint_and_counts_a_cycle() -> None:
+    """With a light load the shoulder recovers below T_0 and the posture returns."""
+    problem = load_problem(PROBLEMS / "line_plane_hysteresis.toml")
+    problem = replace(problem, loads=tuple(replace(ld, mass=1.0) for ld in problem.loads))
+    result = simulate(problem, "nullspace")
+    kinds = [e.kind for e in result.events]
+    assert "constraint_off" in kinds, kinds
+    tl = result.timeline
+    off = next(e for e in result.events if e.kind == "constraint_off")
+    k = int(np.searchsorted(tl.time, off.time_s))
+    assert tl.fatigue[k, 0] <= 0.5
+    assert tl.residuals[-1, 1] < tl.residuals[k, 1]
+
+
+def test_simulate_command_writes_its_files(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    result = CliRunner().invoke(
+        main,
+        [
+            "simulate",
+            str(PROBLEMS / "holding_m45.toml"),
+            "--duration",
+            "200",
+            "--solver",
+            "nullspace",
+            "--strategy",
+            "passive",
+            "--out",
+            str(out),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert "first to fatigue: shoulder_flexors at 172 s" in result.stdout
+    names = {
+        "timeline.csv",
+        "events.csv",
+        "summary.json",
+        "manifest.json",
+        "fatigue.png",
+        "effector.png",
+        "active_torque.png",
+        "postures.png",
+    }
+    assert names <= {p.name for p in out.iterdir()}
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["strategy"] == "passive" and summary["simulated_s"] == 200.0
+    assert summary["half_joints"][0]["first_fatigue_threshold_s"] == 172.0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["ipopt"] != "unknown" and manifest["problem"]["model"] == "sagittal_arm"
+    with (out / "timeline.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 201
+    assert {
+        "time_s",
+        "shoulder_flexion_deg",
+        "wrist_along_line_m",
+        "tau_active_elbow_flexion_Nm",
+        "load_shoulder_flexors_pct_mvc",
+        "fatigue_elbow_flexors",
+        "constraint_owner",
+        "residual_level1_m",
+    } <= set(rows[0])
+
+
+def test_simulate_bad_option_is_one_line(tmp_path: Path) -> None:
+    result = CliRunner().invoke(
+        main,
+        ["simulate", str(PROBLEMS / "holding_m45.toml"), "--r-min", "1.5", "--out", str(tmp_path)],
+    )
+    assert result.exit_code == 2
+    assert len(result.stderr.strip().splitlines()) == 1 and "fatigue.r_min = 1.5" in result.stderr
