@@ -15,17 +15,23 @@ $(BIN)/.installed: pyproject.toml
 demo: $(BIN)/.installed
 	mkdir -p $(DEMO_OUT)
 	$(BIN)/casadi-posture validate problems/*.toml
-	$(BIN)/casadi-posture torques problems/holding_m45.toml | tee $(DEMO_OUT)/torques_holding_m45.txt
-	$(BIN)/casadi-posture torques problems/holding_m45.toml --json > $(DEMO_OUT)/torques_holding_m45.json
-	$(BIN)/casadi-posture describe problems/holding_m45.toml --json > $(DEMO_OUT)/model_holding_m45.json
+	$(BIN)/casadi-posture simulate problems/holding_m45.toml --strategy active \
+		--out $(DEMO_OUT)/holding_m45-active
+	$(BIN)/casadi-posture simulate problems/holding_m45.toml --strategy passive \
+		--out $(DEMO_OUT)/holding_m45-passive
+	$(BIN)/casadi-posture simulate problems/line_plane_hysteresis_free_elbow.toml \
+		--out $(DEMO_OUT)/line_plane_hysteresis_free_elbow
+	$(BIN)/casadi-posture compare problems/*.toml --out $(DEMO_OUT)
 	$(BIN)/casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion \
 		--out $(DEMO_OUT)/frontal_elbow_fig3.png
-	$(BIN)/casadi-posture curve problems/holding_m45.toml --dof shoulder_flexion \
-		--out $(DEMO_OUT)/holding_m45_shoulder.png
 	@echo "demo outputs in $(DEMO_OUT)/"
 
 test: $(BIN)/.installed
 	$(BIN)/python -m pytest
+
+benchmark: $(BIN)/.installed
+	$(BIN)/python benchmarks/solvers.py
+	$(BIN)/python benchmarks/simulation.py
 
 lint: $(BIN)/.installed
 	$(BIN)/ruff check .

@@ -7,9 +7,11 @@ While half-joint ``l`` owns the constraint, each step:
     Δq_j = α·∂h/∂q_j,  h = τe_l(q)²,  α < 0            the other joints reduce the external torque
     a = -Δq/‖Δq‖,  b = aᵀ(q + Δq)                      (paper eqs 9-11)
 
-The current posture violates aᵀq ≤ b by ‖Δq‖; the IK solvers move it across. When
-the goal is reached (Δq = 0) the last direction is kept with b = aᵀq, so lower
-tasks cannot pull the posture back before the owner recovers.
+The current posture violates aᵀq ≤ b by ‖Δq‖; the IK solvers move it across. Near
+the goal Δq shrinks and its direction is no longer meaningful (the α term takes
+over); below ``HOLD_FRACTION`` of Δq_max the last direction is kept, with
+b = aᵀ(q + Δq), so lower tasks cannot pull the posture back before the owner
+recovers.
 """
 
 from __future__ import annotations
@@ -25,6 +27,9 @@ from .hierarchy import Inequality
 from .passive import PassiveTorque
 from .reduced_torque import Goal, JointState, Strategy, goal_angle
 from .torques import Torques
+
+#: Steps shorter than this fraction of Δq_max keep the previous hyperplane direction.
+HOLD_FRACTION = 0.05
 
 EventKind = Literal[
     "fatigue_threshold",
@@ -124,7 +129,7 @@ class FatigueConstraint:
         dq = s.alpha * 2.0 * torques.external[j] * torques.external_jacobian[j]
         dq[j] = np.clip(s.beta * (goal.angle - q[j]), -s.max_step, s.max_step)
         norm = float(np.linalg.norm(dq))
-        if norm > 1e-12:
+        if norm >= HOLD_FRACTION * s.max_step:
             self._direction = -dq / norm
         elif self._direction is None:
             return None

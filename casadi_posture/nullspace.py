@@ -37,12 +37,14 @@ class NullspaceOptions:
 
     ``damping`` λ per task level [task units] (one value for all levels, or one per
     level); ``rank_tolerance`` [task units per rad]; iterate until the largest joint
-    step is below ``tolerance`` [rad] or ``max_iterations`` is reached.
+    step is below ``tolerance`` [rad] or ``max_iterations`` is reached. On an active
+    inequality the activation slack ``limit_slack`` lets the posture chatter by about
+    2e-12 rad, so the tolerance must stay well above it.
     """
 
     damping: float | tuple[float, ...] = 1e-3
     rank_tolerance: float = 1e-9
-    tolerance: float = 1e-12
+    tolerance: float = 1e-10
     max_iterations: int = 1000
     limit_slack: float = 1e-12
 

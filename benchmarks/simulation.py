@@ -1,0 +1,61 @@
+"""Speed of the time simulation with each solver on the shipped scenarios (not a test).
+
+Run: python benchmarks/simulation.py
+
+Per scenario and solver: simulated time, wall time, wall time per simulated minute, and
+the share of wall time spent outside the IK solve (torques, fatigue, the constraint and
+its goal angle, recording). Target: at most 20 % outside the IK.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from casadi_posture.problem import load_problem
+from casadi_posture.report import table
+from casadi_posture.simulation import simulate
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+def main() -> None:
+    rows = []
+    for path in sorted(PROBLEMS.glob("*.toml")):
+        problem = load_problem(path)
+        if not problem.tasks:
+            continue
+        for solver in ("nullspace", "lexicographic"):
+            result = simulate(problem, solver)
+            simulated_min = result.timeline.time[-1] / 60
+            rows.append(
+                [
+                    path.stem,
+                    solver,
+                    60 * simulated_min,
+                    result.wall_time_s,
+                    result.wall_time_s / max(simulated_min, 1e-9),
+                    100 * (1 - result.ik_time_s / result.wall_time_s),
+                    result.timeline.time.size,
+                    result.ik_failures,
+                ]
+            )
+    print(
+        table(
+            [
+                "scenario",
+                "solver",
+                "simulated (s)",
+                "wall (s)",
+                "wall per simulated min (s)",
+                "outside IK (%)",
+                "steps",
+                "IK failures",
+            ],
+            rows,
+            digits=2,
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()
