@@ -64,7 +64,7 @@ def test_compare_explains_an_unreachable_target(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("solver", ["nullspace", "lexicographic"])
 def test_solve_prints_posture_residuals_and_torques(solver: str) -> None:
-    path = str(PROBLEMS / "line_plane_hysteresis.toml")
+    path = str(PROBLEMS / "holding_m45.toml")
     data = json.loads(run("solve", path, "--solver", solver, "--json").stdout)
     assert data["success"] and data["solver"] == solver
     assert data["posture_deg"]["shoulder_flexion"] == pytest.approx(16.8833, abs=1e-3)
