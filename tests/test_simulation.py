@@ -189,3 +189,20 @@ def test_simulate_bad_option_is_one_line(tmp_path: Path) -> None:
     )
     assert result.exit_code == 2
     assert len(result.stderr.strip().splitlines()) == 1 and "fatigue.r_min = 1.5" in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("strategy", "low", "high", "cases"),
+    [("active", 85.0, 95.0, {"3.3"}), ("passive", -10.0, 0.0, {"3.2", "3.4"})],
+)
+def test_the_strategies_reach_their_two_posture_families(strategy, low, high, cases) -> None:
+    """Active: the mid-range zero (forearm vertical); passive: near the extension limit."""
+    problem = load_problem(
+        PROBLEMS / "strategy_frontal_elbow.toml", {"fatigue": {"strategy": strategy}}
+    )
+    tl = simulate(problem, "nullspace").timeline
+    on = int(np.argmax(tl.owner >= 0))
+    reached = np.degrees(tl.q[on + 80, 0])
+    assert low <= reached <= high
+    assert cases <= set(tl.case[on : on + 80])
+    assert tl.load[on + 80, 0] < 1.0
