@@ -44,6 +44,14 @@ def main() -> None:
     """
 
 
+_SOLVER_OPTION = click.option(
+    "--solver",
+    type=click.Choice(SOLVER_NAMES),
+    default=None,
+    help="IK solver [default: the file's solver.name].",
+)
+
+
 def _problem(
     path: str, postures: tuple[str, ...] = (), overrides: dict[str, dict[str, Any]] | None = None
 ) -> Problem:
@@ -280,12 +288,7 @@ def _echo_torques(dofs: list[dict], groups: list[dict]) -> None:
 
 @main.command()
 @click.argument("problem", type=click.Path(dir_okay=False))
-@click.option(
-    "--solver",
-    type=click.Choice(SOLVER_NAMES),
-    default=None,
-    help="IK solver [default: the file's solver.name].",
-)
+@_SOLVER_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 def solve(problem: str, solver: str | None, as_json: bool) -> None:
     """Solve the prioritized IK of a problem from its posture_deg; print the posture,
@@ -418,12 +421,7 @@ def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
 
 @main.command()
 @click.argument("problem", type=click.Path(dir_okay=False))
-@click.option(
-    "--solver",
-    type=click.Choice(SOLVER_NAMES),
-    default=None,
-    help="IK solver [default: the file's solver.name].",
-)
+@_SOLVER_OPTION
 @click.option(
     "--strategy",
     type=click.Choice(["active", "passive"]),

@@ -13,6 +13,7 @@ import numpy as np
 
 from .curve import TorqueCurve
 from .simulation import SimulationResult
+from .tasks import Line
 
 
 def plot_torque_curve(curve: TorqueCurve, path: Path, title: str) -> Path:
@@ -125,8 +126,8 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
     for j, (step, label) in enumerate(shown):
         xyz = np.asarray(points(tl.q[step]))
         ax.plot(xyz[0], xyz[2], "-o", lw=2.5 if j == 0 else 1.5, label=label)
-    for task in (t for level in result.problem.hierarchy().levels for t in level):
-        if hasattr(task, "direction"):
+    for task in result.tasks:
+        if isinstance(task, Line):
             d = np.asarray(task.direction) / np.linalg.norm(task.direction)
             ends = np.asarray(task.point) + np.outer([-0.6, 0.6], d)
             ax.plot(ends[:, 0], ends[:, 2], color="0.5", lw=1, ls="--", label=f"{task.name}")

@@ -124,7 +124,7 @@ def ipopt_version() -> str:
 def _write_timeline(result: SimulationResult, path: Path) -> None:
     tl, body = result.timeline, result.problem.body
     dofs, halves = body.dof_names, [h.name for h in body.half_joints]
-    levels = result.problem.hierarchy().level_units()
+    levels = result.level_units
     header = ["time_s", *[f"{d}_deg" for d in dofs], *[f"{result.effector}_{a}_m" for a in "xyz"]]
     header += [] if tl.along_line is None else [f"{result.effector}_along_line_m"]
     for kind in ("active", "passive", "external"):

@@ -21,7 +21,7 @@ from .fatigue import fatigue_model
 from .fatigue_constraint import ConstraintSettings, Event, FatigueConstraint
 from .problem import Problem
 from .solvers import make_solver
-from .tasks import Line
+from .tasks import Line, Task
 
 #: The top task counts as held while its residual stays below this [m or rad].
 HOLD_TOLERANCE = 1e-4
@@ -51,12 +51,15 @@ class Timeline:
 
 @dataclass(frozen=True)
 class SimulationResult:
-    """A simulated hold with its events and solver statistics (wall times [s])."""
+    """A simulated hold: its tasks, the unit of each level's residual, the timeline, the
+    events and solver statistics (wall times [s])."""
 
     problem: Problem
     solver: str
     settings: ConstraintSettings
     effector: str
+    tasks: tuple[Task, ...]
+    level_units: tuple[str, ...]
     timeline: Timeline
     events: list[Event]
     wall_time_s: float
@@ -204,6 +207,8 @@ def simulate(problem: Problem, solver: str | None = None) -> SimulationResult:
         name,
         settings,
         effector,
+        tuple(t for level in hierarchy.levels for t in level),
+        tuple(hierarchy.level_units()),
         timeline,
         events,
         time.perf_counter() - start,
