@@ -307,6 +307,9 @@ def _problem_error(path: Path, error: ValidationError, raw: dict[str, Any]) -> P
         message = f"a known key: one of {allowed}" if allowed else "no such key"
     elif first["type"] == "missing":
         message = "this key to be given"
+    elif first["type"] == "union_tag_invalid":
+        message = f"one of {first['ctx']['expected_tags']}"
+        first = {**first, "input": first["ctx"]["tag"]}
     elif first["type"] in ("too_short", "too_long"):
         ctx = first.get("ctx", {})
         n = ctx.get("min_length") if first["type"] == "too_short" else ctx.get("max_length")

@@ -8,7 +8,15 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    field_validator,
+    model_validator,
+)
 
 Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
@@ -49,11 +57,22 @@ class NoPassiveSpec(Strict):
     model: Literal["none"]
 
 
+def _passive_model(value: object) -> str:
+    """The passive model's tag; a table without ``model`` is the exponential default."""
+    if isinstance(value, dict):
+        return value.get("model", "exponential")
+    return getattr(value, "model", "exponential")
+
+
+PassiveSpec = Annotated[
+    Annotated[ExponentialPassiveSpec, Tag("exponential")] | Annotated[NoPassiveSpec, Tag("none")],
+    Discriminator(_passive_model),
+]
+
+
 class DofSpec(Strict):
     range_deg: Pair | None = None
-    passive: (
-        Annotated[ExponentialPassiveSpec | NoPassiveSpec, Field(discriminator="model")] | None
-    ) = None
+    passive: PassiveSpec | None = None
 
     _range = field_validator("range_deg")(lambda v: v if v is None else _increasing(v))
 

@@ -257,3 +257,29 @@ def test_console_script_exit_code_and_no_traceback(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "loads[0].mass_kg = -1.0" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_a_passive_override_without_model_is_the_exponential(tmp_path: Path) -> None:
+    """The form problems/README.md documents: no 'model' key."""
+    path = tmp_path / "override.toml"
+    path.write_text(
+        GOOD.replace(
+            "[posture_deg]",
+            "[body.dofs.elbow_flexion]\npassive = { k1_Nm "
+            "= 2.0, k2_per_rad = 20.0, q1_deg = 0.0, k3_Nm = 1.0, k4_per_rad"
+            " = 8.0, q2_deg = 120.0 }\n\n[posture_deg]",
+        )
+    )
+    data = json.loads(run("describe", str(path), "--json").stdout)
+    names = {p["name"]: p for p in data["parameters"]}
+    assert names["joints.elbow_flexion.passive.k1"]["value"] == 2.0
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        GOOD.replace(
+            "[posture_deg]",
+            '[body.dofs.elbow_flexion]\npassive = { model = "springy" }\n\n[posture_deg]',
+        )
+    )
+    result = run("validate", str(bad))
+    assert result.exit_code == 2
+    assert "passive = 'springy': expected one of 'exponential', 'none'" in result.stderr

@@ -206,3 +206,18 @@ def test_the_strategies_reach_their_two_posture_families(strategy, low, high, ca
     assert low <= reached <= high
     assert cases <= set(tl.case[on : on + 80])
     assert tl.load[on + 80, 0] < 1.0
+
+
+def test_the_shoulder_finds_a_partial_reduction_at_its_limit() -> None:
+    """Fig. 15: the passive strategy takes the shoulder to its 0° limit (case 1.2), where
+    passive tissue carries part of the load: a partial reduction, enough to recover."""
+    result = simulate(load_problem(PROBLEMS / "strategy_shoulder_limit.toml"), "nullspace")
+    tl = result.timeline
+    on = int(np.argmax(tl.owner >= 0))
+    at_limit = on + int(np.argmax(tl.q[on:, 0] <= 1e-3))
+    assert at_limit > on
+    assert set(tl.case[on + 1 : at_limit + 1]) == {"1.2"}
+    assert tl.residuals[at_limit, 0] < 1e-6
+    assert 0.1 * tl.active[0, 0] < tl.active[at_limit, 0] < 0.3 * tl.active[0, 0]
+    assert tl.passive[at_limit, 0] > 0.5
+    assert "constraint_off" in [e.kind for e in result.events]
