@@ -221,3 +221,22 @@ def test_the_shoulder_finds_a_partial_reduction_at_its_limit() -> None:
     assert 0.1 * tl.active[0, 0] < tl.active[at_limit, 0] < 0.3 * tl.active[0, 0]
     assert tl.passive[at_limit, 0] > 0.5
     assert "constraint_off" in [e.kind for e in result.events]
+
+
+def test_without_slope_matching_strategy_and_r_min_change_nothing() -> None:
+    """Fig. 16: the elbow extensors tire first; with no slope matching (cases 1.x) the active
+    strategy with R = 0.2 and the passive strategy with R = 1 give the same run."""
+    runs = [
+        simulate(
+            load_problem(
+                PROBLEMS / "strategy_extensors.toml", {"fatigue": {"strategy": s, "r_min": r}}
+            ),
+            "nullspace",
+        )
+        for s, r in (("active", 0.2), ("passive", 1.0))
+    ]
+    first = next(e for e in runs[0].events if e.kind == "fatigue_threshold")
+    assert first.half_joint == "elbow_extensors"
+    assert {c[:1] for c in runs[0].timeline.case if c} == {"1"}
+    assert np.array_equal(runs[0].timeline.q, runs[1].timeline.q)
+    assert "constraint_off" in [e.kind for e in runs[0].events]
