@@ -53,7 +53,7 @@ _SOLVER_OPTION = click.option(
 
 
 def _problem(
-    path: str, postures: tuple[str, ...] = (), overrides: dict[str, dict[str, Any]] | None = None
+    path: str, postures: tuple[str, ...] = (), overrides: dict[str, Any] | None = None
 ) -> Problem:
     problem = load_problem(path, overrides)
     if postures:
@@ -464,11 +464,12 @@ def simulate(
     from .results import summary, write_results
     from .simulation import simulate as run
 
-    fatigue = {k: v for k, v in (("strategy", strategy), ("r_min", r_min)) if v is not None}
-    overrides = {
-        "fatigue": fatigue,
-        "simulation": {} if duration is None else {"duration_s": duration},
-    }
+    given = (
+        ("fatigue.strategy", strategy),
+        ("fatigue.r_min", r_min),
+        ("simulation.duration_s", duration),
+    )
+    overrides = {key: value for key, value in given if value is not None}
     resolved = _problem(problem, overrides=overrides)
     result = run(resolved, solver)
     out = out or Path(

@@ -6,6 +6,7 @@ import math
 import tomllib
 import types
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from .fatigue import fatigue_model
 from .hierarchy import TaskHierarchy
 from .loads import Load
 from .models import MODELS
+from .overrides import apply
 from .parameters import Parameter
 from .passive import ExponentialPassive, NoPassive, PassiveTorque
 from .schema import (
@@ -72,11 +74,11 @@ class Problem:
         return replace(self, posture=q)
 
 
-def load_problem(path: str | Path, overrides: dict[str, dict[str, Any]] | None = None) -> Problem:
+def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
     """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`.
 
-    ``overrides`` replaces keys of the file's tables before validation, e.g.
-    ``{"fatigue": {"strategy": "passive"}}`` (what command-line options set).
+    ``overrides`` sets dotted keys before validation, e.g. ``{"fatigue.strategy":
+    "passive", "loads[0].mass_kg": 5.0}`` (command-line options, what-if grids).
     """
     path = Path(path)
     try:
@@ -89,8 +91,7 @@ def load_problem(path: str | Path, overrides: dict[str, dict[str, Any]] | None =
         raise ProblemError(path, None, None, f"a readable UTF-8 file ({error})") from None
     except tomllib.TOMLDecodeError as error:
         raise ProblemError(path, None, None, f"valid TOML ({error})") from None
-    for table, values in (overrides or {}).items():
-        raw[table] = {**raw.get(table, {}), **values}
+    raw = apply(raw, overrides or {}, path)
     try:
         spec = ProblemSpec.model_validate(raw)
     except ValidationError as error:

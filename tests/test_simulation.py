@@ -20,7 +20,8 @@ from casadi_posture.simulation import simulate
 
 def _holding(duration: float = 240.0, **fatigue):
     return load_problem(
-        PROBLEMS / "holding_m45.toml", {"simulation": {"duration_s": duration}, "fatigue": fatigue}
+        PROBLEMS / "holding_m45.toml",
+        {"simulation.duration_s": duration, **{f"fatigue.{k}": v for k, v in fatigue.items()}},
     )
 
 
@@ -197,9 +198,7 @@ def test_simulate_bad_option_is_one_line(tmp_path: Path) -> None:
 )
 def test_the_strategies_reach_their_two_posture_families(strategy, low, high, cases) -> None:
     """Active: the mid-range zero (forearm vertical); passive: near the extension limit."""
-    problem = load_problem(
-        PROBLEMS / "strategy_frontal_elbow.toml", {"fatigue": {"strategy": strategy}}
-    )
+    problem = load_problem(PROBLEMS / "strategy_frontal_elbow.toml", {"fatigue.strategy": strategy})
     tl = simulate(problem, "nullspace").timeline
     on = int(np.argmax(tl.owner >= 0))
     reached = np.degrees(tl.q[on + 80, 0])
@@ -229,7 +228,7 @@ def test_without_slope_matching_strategy_and_r_min_change_nothing() -> None:
     runs = [
         simulate(
             load_problem(
-                PROBLEMS / "strategy_extensors.toml", {"fatigue": {"strategy": s, "r_min": r}}
+                PROBLEMS / "strategy_extensors.toml", {"fatigue.strategy": s, "fatigue.r_min": r}
             ),
             "nullspace",
         )

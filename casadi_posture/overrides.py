@@ -1,0 +1,72 @@
+"""Changes to a problem file given as dotted keys: ``fatigue.strategy``, ``loads[0].mass_kg``.
+
+Command-line options, what-if grids and batch cases use them; the changed file is then
+validated like any other, so a bad value gets the same one-line error.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from collections.abc import Mapping
+from copy import deepcopy
+from pathlib import Path
+from typing import Any
+
+from .errors import ProblemError
+
+_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
+
+
+def parse_key(key: str) -> list[str | int]:
+    """``loads[0].mass_kg`` -> ['loads', 0, 'mass_kg'] (``loads.0.mass_kg`` works too)."""
+    parts: list[str | int] = []
+    for piece in key.split("."):
+        if piece.isdigit():
+            parts.append(int(piece))
+            continue
+        matched = 0
+        for match in _TOKEN.finditer(piece):
+            if match.start() != matched:
+                break
+            parts.append(match.group(1) if match.group(1) else int(match.group(2)))
+            matched = match.end()
+        if matched != len(piece) or not piece:
+            raise ProblemError(
+                None, key, None, "a dotted key such as fatigue.r_min or loads[0].mass_kg"
+            )
+    return parts
+
+
+def parse_value(text: str) -> Any:
+    """A value as TOML reads it (``5``, ``2.5``, ``true``, ``[0, 1]``); otherwise the string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) -> dict[str, Any]:
+    """A copy of the file's data ``raw`` with each dotted key set to its value."""
+    out = deepcopy(raw)
+    for key, value in overrides.items():
+        parts = parse_key(key)
+        node: Any = out
+        for depth, part in enumerate(parts[:-1]):
+            nxt = parts[depth + 1]
+            if isinstance(part, int):
+                if not isinstance(node, list) or part >= len(node):
+                    raise ProblemError(path, key, value, "an index of an existing list item")
+                node = node[part]
+            else:
+                if not isinstance(node, dict):
+                    raise ProblemError(path, key, value, "a key inside a table")
+                node = node.setdefault(part, [] if isinstance(nxt, int) else {})
+        last = parts[-1]
+        if isinstance(last, int):
+            if not isinstance(node, list) or last >= len(node):
+                raise ProblemError(path, key, value, "an index of an existing list item")
+        elif not isinstance(node, dict):
+            raise ProblemError(path, key, value, "a key inside a table")
+        node[last] = value
+    return out
