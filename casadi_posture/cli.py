@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import shutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -523,6 +524,174 @@ def simulate(
         else "task held to the end"
     )
     click.echo("files: " + ", ".join(str(f) for f in files))
+
+
+_BATCH_OPTIONS = [
+    click.option(
+        "--jobs",
+        type=click.IntRange(min=1),
+        default=1,
+        show_default=True,
+        help="Cases run in parallel on this machine.",
+    ),
+    click.option(
+        "--scheduler",
+        metavar="ADDRESS",
+        default=None,
+        help="Run on a Dask cluster, e.g. tcp://10.0.0.5:8786.",
+    ),
+    click.option(
+        "--resume",
+        is_flag=True,
+        help="Continue a batch in --out: finished cases are not run again.",
+    ),
+    click.option("--quiet", is_flag=True, help="No progress bar."),
+]
+
+
+def _batch_options(command: Any) -> Any:
+    for option in reversed(_BATCH_OPTIONS):
+        command = option(command)
+    return command
+
+
+@main.command()
+@click.argument("problems", nargs=-1, required=True, type=click.Path())
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    required=True,
+    help="Output folder: cases/<case>/ and summary.csv.",
+)
+@_SOLVER_OPTION
+@_batch_options
+def batch(
+    problems: tuple[str, ...],
+    out: Path,
+    solver: str | None,
+    jobs: int,
+    scheduler: str | None,
+    resume: bool,
+    quiet: bool,
+) -> None:
+    """Simulate many problem files (folders give their *.toml): each case in its own
+    folder as simulate writes it, and one summary row per case in summary.csv (and
+    summary.parquet when pyarrow is installed).
+
+    A failing case is recorded with its reason and the batch carries on. Exit code 0
+    when every case succeeded, 1 when some failed, 2 for usage errors. A killed batch
+    rerun with --resume redoes no finished case.
+
+    \b
+    Example:
+      casadi-posture batch problems/ --out out/batch --jobs 2
+      casadi-posture batch problems/ --out out/batch --jobs 2 --resume
+    """
+    from .batch import cases_from_paths, run_batch
+
+    report = run_batch(
+        cases_from_paths(problems, solver),
+        out,
+        jobs=jobs,
+        scheduler=scheduler,
+        resume=resume,
+        quiet=quiet,
+    )
+    click.echo(
+        f"{len(report.rows)} cases ({report.ran} run now, {report.skipped} already "
+        f"done), {len(report.failed)} failed; summary: {report.summary}"
+    )
+    for row in report.failed:
+        click.echo(f"failed {row['case']}: {row['error']}")
+    if report.failed:
+        raise SystemExit(1)
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--vary",
+    "varies",
+    multiple=True,
+    required=True,
+    metavar="KEY=V1,V2,...",
+    help="A problem key and its values (repeatable): loads[0].mass_kg=2.5,5, "
+    "fatigue.strategy=active,passive, body.sex=male,female, solver=...",
+)
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: out/whatif/<problem>].",
+)
+@click.option(
+    "--static", is_flag=True, help="Answer from torques at the start posture only (no time loop)."
+)
+@_SOLVER_OPTION
+@_batch_options
+def whatif(
+    problem: str,
+    varies: tuple[str, ...],
+    out: Path | None,
+    static: bool,
+    solver: str | None,
+    jobs: int,
+    scheduler: str | None,
+    resume: bool,
+    quiet: bool,
+) -> None:
+    """What if the load, the line, the strategy, R_min, the thresholds, the body or the
+    solver were different? Runs the grid of the varied keys and reports per case the
+    endurance of each half-joint and of the task, the limiting muscle group, the
+    fatigue/recovery cycles and the recovery posture: a table, whatif.csv and a plot
+    of each outcome against each varied key.
+
+    \b
+    Example:
+      casadi-posture whatif problems/holding_m45.toml --vary loads[0].mass_kg=1,2.5,5
+      casadi-posture whatif problems/holding_m25.toml --vary tasks[0].elevation_deg=0,-25,-45 \\
+          --vary fatigue.strategy=active,passive --jobs 2
+      casadi-posture whatif problems/holding_m45.toml --vary body.mass_kg=60,73,90 --static
+    """
+    from .batch import run_batch
+    from .whatif import grid, parse_vary, plot_outcomes
+
+    parsed = [parse_vary(text) for text in varies]
+    out = out or Path("out", "whatif", Path(problem).stem)
+    cases = grid(problem, parsed, solver=solver, simulate=not static)
+    report = run_batch(cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet)
+    shutil.copyfile(report.summary, out / "whatif.csv")
+    keys = [k for k, _ in parsed]
+    headers = [*keys, "limiting group", "endurance at start (min)"]
+    if not static:
+        headers += ["first at threshold (s)", "cycles", "task held (s)"]
+    rows = []
+    order = {k: [str(v) for v in values] for k, values in parsed}
+
+    def position(row: dict[str, Any]) -> list[int]:
+        given = [str(row.get("solver") if k == "solver" else row.get(k)) for k in keys]
+        return [
+            order[k].index(v) if v in order[k] else -1 for k, v in zip(keys, given, strict=True)
+        ]
+
+    for row in sorted(report.rows, key=position):
+        if row["status"] != "ok":
+            failed = [*(row.get(k) for k in keys), f"failed: {row['error']}"]
+            rows.append(failed + [None] * (len(headers) - len(failed)))
+            continue
+        line = [
+            *(row.get("solver") if k == "solver" else row.get(k) for k in keys),
+            row["limiting_group"],
+            row["limiting_endurance_min"],
+        ]
+        if not static:
+            line += [row["first_fatigue_s"], row["fatigue_recovery_cycles"], row["task_held_s"]]
+        rows.append(line)
+    click.echo(table(headers, rows, digits=2))
+    figures = plot_outcomes(report.rows, parsed, out, simulate=not static)
+    click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(figures)} in {out}")
+    if report.failed:
+        raise SystemExit(1)
 
 
 @main.command()

@@ -74,21 +74,32 @@ class Problem:
         return replace(self, posture=q)
 
 
-def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
-    """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`.
-
-    ``overrides`` sets dotted keys before validation, e.g. ``{"fatigue.strategy":
-    "passive", "loads[0].mass_kg": 5.0}`` (command-line options, what-if grids).
-    """
+def read_problem_text(path: str | Path) -> str:
+    """The text of a problem file; a missing or unreadable file raises :class:`ProblemError`."""
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise ProblemError(path, None, None, "the file does not exist") from None
     except IsADirectoryError:
         raise ProblemError(path, None, None, "a problem file, got a directory") from None
     except (OSError, UnicodeDecodeError) as error:
         raise ProblemError(path, None, None, f"a readable UTF-8 file ({error})") from None
+
+
+def load_problem(
+    path: str | Path, overrides: Mapping[str, Any] | None = None, *, text: str | None = None
+) -> Problem:
+    """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`.
+
+    ``overrides`` sets dotted keys before validation, e.g. ``{"fatigue.strategy":
+    "passive", "loads[0].mass_kg": 5.0}`` (command-line options, what-if grids).
+    ``text``, when given, is the file's content (a batch worker that has no copy of
+    the file); ``path`` then only names it in messages.
+    """
+    path = Path(path)
+    try:
+        raw = tomllib.loads(read_problem_text(path) if text is None else text)
     except tomllib.TOMLDecodeError as error:
         raise ProblemError(path, None, None, f"valid TOML ({error})") from None
     raw = apply(raw, overrides or {}, path)
