@@ -32,6 +32,7 @@ test: $(BIN)/.installed
 benchmark: $(BIN)/.installed
 	$(BIN)/python benchmarks/solvers.py
 	$(BIN)/python benchmarks/simulation.py
+	$(BIN)/python benchmarks/whatif.py
 
 lint: $(BIN)/.installed
 	$(BIN)/ruff check .
