@@ -1,0 +1,7 @@
+"""``python -m casadi_posture.cli``."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

@@ -1,0 +1,205 @@
+"""Commands on the model and its torques: validate, describe, torques, curve."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from ..curve import torque_curve
+from ..describe import description
+from ..errors import ProblemError
+from ..problem import load_problem
+from ..report import table
+from .common import echo_torques, emit_json, json_groups, main, problem_from, torque_breakdown
+
+
+@main.command()
+@click.argument("problems", nargs=-1, required=True, type=click.Path(dir_okay=False))
+def validate(problems: tuple[str, ...]) -> None:
+    """Check problem files; print 'ok' per valid file.
+
+    \b
+    Example:
+      casadi-posture validate problems/*.toml
+    """
+    for path in problems:
+        problem = load_problem(path)
+        click.echo(
+            f"ok  {path}  ({problem.body.name}, {problem.body.n} DOF, "
+            f"{len(problem.loads)} loads, {len(problem.tasks)} tasks)"
+        )
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+def describe(problem: str, as_json: bool) -> None:
+    """Show the resolved model: DOFs, segments, loads, tasks, parameters and their sources.
+
+    Positions are world coordinates at the zero posture (x forward, y left, z up).
+
+    \b
+    Example:
+      casadi-posture describe problems/holding_m45.toml
+      casadi-posture describe problems/holding_m45.toml --json > model.json
+    """
+    data = description(problem_from(problem))
+    if as_json:
+        emit_json(data)
+        return
+    click.echo(f"{data['problem']}: {data['title']}")
+    click.echo(
+        f"model {data['model']}, {data['sex']}, stature {data['stature_m']} m, "
+        f"body mass {data['body_mass_kg']} kg, g = {data['gravity_m_s2']} m/s²\n"
+    )
+    click.echo(
+        table(
+            ["DOF", "parent", "origin (m)", "axis", "range (deg)", "positive / negative group"],
+            [
+                [
+                    d["name"],
+                    d["parent"] or "world",
+                    _vec(d["origin_m"]),
+                    _vec(d["axis"], 3),
+                    f"[{d['range_deg'][0]:g}, {d['range_deg'][1]:g}]",
+                    f"{d['half_joints']['positive']} / {d['half_joints']['negative']}",
+                ]
+                for d in data["dofs"]
+            ],
+        )
+    )
+    click.echo()
+    click.echo(
+        table(
+            ["segment", "mass (kg)", "COM (m)", "moved by DOF"],
+            [
+                [s["name"], s["mass_kg"], _vec(s["com_m"]), s["dof"] or "(fixed)"]
+                for s in data["segments"]
+            ],
+        )
+    )
+    click.echo()
+    if data["loads"]:
+        click.echo(
+            table(
+                ["load", "at", "point (m)", "mass (kg)", "force (N)", "moved by DOF"],
+                [
+                    [
+                        ld["name"],
+                        ld["at"],
+                        _vec(ld["point_m"]),
+                        ld["mass_kg"],
+                        _vec(ld["force_N"], 1),
+                        ld["dof"] or "(fixed)",
+                    ]
+                    for ld in data["loads"]
+                ],
+            )
+        )
+        click.echo()
+    if data["tasks"]:
+        click.echo(
+            table(
+                ["task", "kind", "priority"],
+                [[t["name"], t["kind"], t["priority"]] for t in data["tasks"]],
+            )
+        )
+        click.echo()
+    click.echo(
+        table(
+            ["parameter", "value", "unit", "status", "source"],
+            [
+                [p["name"], _value(p["value"]), p["unit"], p["status"], p["source"]]
+                for p in data["parameters"]
+            ],
+        )
+    )
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--posture",
+    "postures",
+    multiple=True,
+    metavar="NAME=DEG",
+    help="Set a DOF angle in degrees (repeatable); default: the file's posture_deg.",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
+    """Per DOF the external, passive and active torque; per half-joint its load and endurance.
+
+    \b
+    Example:
+      casadi-posture torques problems/holding_m45.toml
+      casadi-posture torques problems/holding_m45.toml --posture shoulder_flexion=90 \\
+          --posture elbow_flexion=0 --json
+    """
+    resolved = problem_from(problem, postures)
+    dofs, groups = torque_breakdown(resolved, resolved.posture)
+    model_name = resolved.spec.fatigue.endurance
+    if as_json:
+        emit_json(
+            {
+                "problem": problem,
+                "endurance_model": model_name,
+                "dofs": dofs,
+                "half_joints": json_groups(groups),
+            }
+        )
+        return
+    click.echo(f"{problem} ({resolved.body.name}); endurance model: {model_name}\n")
+    echo_torques(dofs, groups)
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option("--dof", required=True, help="The DOF to sweep over its range.")
+@click.option(
+    "--posture",
+    "postures",
+    multiple=True,
+    metavar="NAME=DEG",
+    help="Hold another DOF at this angle in degrees (repeatable).",
+)
+@click.option(
+    "--out",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="PNG file to write [default: <problem>-<dof>.png].",
+)
+def curve(problem: str, dof: str, postures: tuple[str, ...], out: Path | None) -> None:
+    """Plot τp, τe, τa and -τa over one DOF's range (the paper's Fig. 3) and print the
+    angles where the active torque is zero.
+
+    \b
+    Example:
+      casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion --out fig3.png
+    """
+    from ..plots import plot_torque_curve
+
+    resolved = problem_from(problem, postures)
+    if dof not in resolved.body.index:
+        raise ProblemError(None, "--dof", dof, f"one of {resolved.body.dof_names}")
+    result = torque_curve(resolved.torque_model(), resolved.posture, dof)
+    out = out or Path(f"{Path(problem).stem}-{dof}.png")
+    plot_torque_curve(result, out, f"{Path(problem).stem}: torques over {dof}")
+    click.echo(f"zeros of the active torque over {dof} (other DOFs held at the problem's posture):")
+    click.echo(
+        table(
+            ["angle (deg)", "passive = -external (N·m)", "kind"],
+            [[float(np.degrees(z.angle)), z.passive, z.kind] for z in result.zeros],
+        )
+    )
+    click.echo(f"figure: {out}")
+
+
+def _vec(values: list[float], digits: int = 4) -> str:
+    return "(" + ", ".join(f"{v:.{digits}f}" for v in values) + ")"
+
+
+def _value(value: Any) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
