@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from .endurance import endurance_model
+from .endurance import endurance_model, half_joint_endurance_s
 from .errors import CasadiPostureError, ProblemError
 from .problem import Problem, load_problem, read_problem_text
 from .solvers import make_solver
@@ -111,7 +111,9 @@ def _text(path: Path) -> str | None:
 
 
 def run_case(case: Case) -> Outcome:
-    """Run one case from its plain description (in any process); never raises."""
+    """Run one case from its plain description (in any process); never raises. A simulated
+    case takes its start-posture outcomes from the simulation's first step, which solves
+    the same IK from the same posture, so nothing is built twice."""
     row: dict[str, Any] = {"case": case.name, "problem": case.problem, **case.overrides}
     try:
         problem = load_problem(case.problem, case.overrides, text=case.text)
@@ -120,11 +122,12 @@ def run_case(case: Case) -> Outcome:
             "strategy": problem.spec.fatigue.strategy,
             "r_min": problem.spec.fatigue.r_min,
         }
-        row |= static_outcomes(problem, case.solver)
         files: dict[str, bytes] = {}
         if case.simulate:
             simulated, files = _simulate(problem, case.solver)
             row |= simulated
+        else:
+            row |= static_outcomes(problem, case.solver)
         return Outcome(case.name, True, {**row, "status": "ok", "error": ""}, files)
     except CasadiPostureError as error:
         reason = str(error)
@@ -144,22 +147,28 @@ def static_outcomes(problem: Problem, solver: str | None) -> dict[str, Any]:
     if problem.tasks:
         name = solver or problem.spec.solver.name
         q = make_solver(name, problem.hierarchy(), problem.spec.solver).solve(q).q
-    torques = problem.torque_model().evaluate(q)
+    loads = problem.torque_model().evaluate(q).load_pct_mvc
     model = endurance_model(problem.spec.fatigue.endurance)
+    return _endurance_columns(
+        {
+            half.name: (
+                float(loads[k]),
+                half_joint_endurance_s(model, float(loads[k]), half.region),
+            )
+            for k, half in enumerate(problem.body.half_joints)
+        }
+    )
+
+
+def _endurance_columns(groups: dict[str, tuple[float, float]]) -> dict[str, Any]:
+    """Columns of each half-joint's start load [%MVC] and endurance [min] (from seconds),
+    and the limiting group: the one with the shortest endurance."""
     row: dict[str, Any] = {}
-    best, limiting = math.inf, ""
-    for k, half in enumerate(problem.body.half_joints):
-        load = float(torques.load_pct_mvc[k])
-        minutes = (
-            math.inf
-            if torques.half_joint_torque[k] == 0
-            else float(model.endurance_time_s(load, half.region)) / 60
-        )
-        row[f"initial_load_{half.name}_pct_mvc"] = load
-        row[f"initial_endurance_{half.name}_min"] = minutes
-        if minutes < best:
-            best, limiting = minutes, half.name
-    return row | {"limiting_group": limiting, "limiting_endurance_min": best}
+    for name, (load, seconds) in groups.items():
+        row[f"initial_load_{name}_pct_mvc"] = load
+        row[f"initial_endurance_{name}_min"] = seconds / 60
+    limiting = min(groups, key=lambda name: groups[name][1])
+    return row | {"limiting_group": limiting, "limiting_endurance_min": groups[limiting][1] / 60}
 
 
 def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dict[str, bytes]]:
@@ -174,7 +183,14 @@ def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dic
         files = {p.name: p.read_bytes() for p in written}
     lost = report["task_lost"]
     first = report["first_to_fatigue"]
-    row: dict[str, Any] = {
+    start = {
+        g["half_joint"]: (
+            g["initial_load_pct_mvc"],
+            math.inf if g["initial_endurance_min"] is None else 60 * g["initial_endurance_min"],
+        )
+        for g in report["half_joints"]
+    }
+    row: dict[str, Any] = _endurance_columns(start) | {
         "simulated_s": report["simulated_s"],
         "first_to_fatigue": first["half_joint"] if first else "",
         "first_fatigue_s": first["time_s"] if first else None,

@@ -8,6 +8,7 @@ extrapolates its own curve there (see each class). Coefficients live in
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -161,3 +162,11 @@ def endurance_model(name: str) -> EnduranceModel:
     if name not in ENDURANCE_MODELS:
         raise ProblemError(None, "fatigue.endurance", name, f"one of {', '.join(ENDURANCE_MODELS)}")
     return ENDURANCE_MODELS[name]()
+
+
+def half_joint_endurance_s(model: EnduranceModel, load_pct_mvc: float, region: str) -> float:
+    """Endurance [s] of a half-joint at ``load_pct_mvc``: infinite when it carries nothing
+    (the antagonist of the group that holds the load), else the model's time."""
+    if load_pct_mvc == 0.0:
+        return math.inf
+    return float(model.endurance_time_s(load_pct_mvc, region))

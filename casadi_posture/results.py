@@ -14,7 +14,7 @@ import numpy as np
 
 from . import __version__
 from .describe import description
-from .endurance import endurance_model
+from .endurance import endurance_model, half_joint_endurance_s
 from .simulation import SimulationResult
 
 
@@ -28,7 +28,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
     for k, half in enumerate(body.half_joints):
         first = np.flatnonzero(tl.fatigue[:, k] >= settings.fatigue_threshold)
         load0 = float(tl.load[0, k])
-        initial = math.inf if load0 == 0.0 else float(model.endurance_time_s(load0, half.region))
+        initial = half_joint_endurance_s(model, load0, half.region)
         groups.append(
             {
                 "half_joint": half.name,

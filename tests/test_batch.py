@@ -267,3 +267,18 @@ def test_a_case_runs_from_its_text_where_the_file_does_not_exist() -> None:
     assert {"timeline.csv", "summary.json", "fatigue.png"} <= set(outcome.files)
     missing = run_case(Case("gone", "/nowhere/holding.toml"))
     assert not missing.ok and "does not exist" in missing.row["error"]
+
+
+def test_simulated_and_static_cases_agree_on_the_start_posture() -> None:
+    """A simulated case reads its start outcomes from the simulation's first step; they must
+    be what the static path computes from the torques at the solved start posture."""
+    from casadi_posture.batch import Case, run_case
+
+    text = HOLD.replace("duration_s = 1800.0", "duration_s = 5.0")
+    simulated = run_case(Case("s", "holding.toml", {}, "nullspace", True, text)).row
+    static = run_case(Case("t", "holding.toml", {}, "nullspace", False, text)).row
+    keys = [k for k in static if k.startswith(("initial_", "limiting_endurance"))]
+    assert len(keys) == 9
+    for key in keys:
+        assert simulated[key] == pytest.approx(static[key], rel=1e-9), key
+    assert simulated["limiting_group"] == static["limiting_group"] == "shoulder_flexors"

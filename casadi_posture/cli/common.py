@@ -10,7 +10,7 @@ import click
 import numpy as np
 
 from .. import __version__
-from ..endurance import endurance_model
+from ..endurance import endurance_model, half_joint_endurance_s
 from ..errors import CasadiPostureError, ProblemError
 from ..problem import Problem, load_problem
 from ..report import table
@@ -81,11 +81,7 @@ def torque_breakdown(problem: Problem, q: np.ndarray) -> tuple[list[dict], list[
     groups = []
     for k, half in enumerate(body.half_joints):
         load = float(result.load_pct_mvc[k])
-        seconds = (
-            math.inf
-            if result.half_joint_torque[k] == 0.0
-            else float(endurance.endurance_time_s(load, half.region))
-        )
+        seconds = half_joint_endurance_s(endurance, load, half.region)
         groups.append(
             {
                 "name": half.name,
