@@ -8,11 +8,17 @@ into place), so a folder exists only complete: a killed batch rerun with
 ``resume`` redoes no finished case and finds no half-written one. The batch
 summary is rebuilt from the case folders, sorted by case name and without wall
 times, so it is the same whatever the number of jobs.
+
+A case that ran records ``ok``, or ``flagged`` when its answer cannot be used as it is
+(level 1 not reached, a group over strength, a solver that failed); one that could not
+run records ``failed`` with a one-line reason (the traceback goes to its
+``failure.json``); a problem without tasks is ``skipped``.
 """
 
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 import multiprocessing
@@ -20,24 +26,36 @@ import os
 import shutil
 import sys
 import tempfile
+import time
 import traceback
 from collections.abc import Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
-import numpy as np
 from tqdm import tqdm
 
-from .endurance import endurance_model, half_joint_endurance_s
-from .errors import CasadiPostureError, ProblemError
+from . import __version__, interrupt
+from .errors import MISSING, CasadiPostureError, ProblemError
+from .ik import ACHIEVED_TOLERANCE
+from .plain import dumps, plain
 from .problem import Problem, load_problem, read_problem_text
 from .solvers import make_solver
+from .static import STRENGTH_PCT_MVC, group_loads, rule
 
 CASES = "cases"
 ROW = "row.json"
-LEADING = ("case", "status", "error", "problem", "solver", "strategy", "r_min")
+RUN = "run.json"
+LEADING = ("case", "status", "flags", "error", "problem", "solver", "strategy", "r_min")
+
+#: A case's status: it ran and its answer stands (``ok``), it ran but its answer cannot be
+#: used as it is (``flagged``: see its ``flags``), it could not run (``failed``: see its
+#: ``error``), or there was nothing to run (``skipped``: a problem without tasks).
+Status = Literal["ok", "flagged", "failed", "skipped"]
+
+#: Longest one-line reason kept in a table or summary; the whole story is in failure.json.
+REASON_CHARACTERS = 300
 
 
 @dataclass(frozen=True)
@@ -54,29 +72,39 @@ class Case:
     simulate: bool = True
     text: str | None = None
 
+    def fingerprint(self) -> str:
+        """A hash of everything that decides the case's result (and the tool's version)."""
+        described = {k: v for k, v in asdict(self).items() if k != "text"}
+        blob = json.dumps([__version__, described, self.text], sort_keys=True, default=str)
+        return hashlib.sha256(blob.encode()).hexdigest()
+
 
 @dataclass(frozen=True)
 class Outcome:
     """What a worker returns: the case's summary row and its files' bytes."""
 
     name: str
-    ok: bool
     row: dict[str, Any]
     files: dict[str, bytes]
 
 
 @dataclass(frozen=True)
 class BatchReport:
-    """The rows of every case in the output folder, sorted by case, and what ran now."""
+    """The rows of every case in the output folder, sorted by case, what ran now, and whether
+    Ctrl-C stopped the run (the finished cases are kept)."""
 
     rows: list[dict[str, Any]]
     ran: int
     skipped: int
     summary: Path
+    interrupted: bool = False
+
+    def with_status(self, *status: Status) -> list[dict[str, Any]]:
+        return [r for r in self.rows if r["status"] in status]
 
     @property
     def failed(self) -> list[dict[str, Any]]:
-        return [r for r in self.rows if r["status"] != "ok"]
+        return self.with_status("failed")
 
 
 def cases_from_paths(paths: Sequence[str | Path], solver: str | None = None) -> list[Case]:
@@ -91,7 +119,7 @@ def cases_from_paths(paths: Sequence[str | Path], solver: str | None = None) -> 
         else:
             raise ProblemError(item, None, None, "an existing problem file or folder")
     if not files:
-        raise ProblemError(None, "PROBLEM_OR_DIR", [str(p) for p in paths], "at least one .toml")
+        raise ProblemError(paths[0] if paths else None, None, None, "a folder with .toml files")
     stems = [f.stem for f in files]
     names = [
         f.stem if stems.count(f.stem) == 1 else safe_name(str(f.with_suffix(""))) for f in files
@@ -111,7 +139,8 @@ def _text(path: Path) -> str | None:
 
 
 def run_case(case: Case) -> Outcome:
-    """Run one case from its plain description (in any process); never raises. A simulated
+    """Run one case from its plain description (in any process); never raises but for
+    Ctrl-C (``KeyboardInterrupt``: an interrupted case is not a finished one). A simulated
     case takes its start-posture outcomes from the simulation's first step, which solves
     the same IK from the same posture, so nothing is built twice."""
     row: dict[str, Any] = {"case": case.name, "problem": case.problem, **case.overrides}
@@ -121,54 +150,83 @@ def run_case(case: Case) -> Outcome:
             "solver": case.solver or problem.spec.solver.name,
             "strategy": problem.spec.fatigue.strategy,
             "r_min": problem.spec.fatigue.r_min,
+            "fatigue_model": problem.fatigue.name,
+            "endurance_rule": rule(problem),
         }
+        if case.simulate and not problem.tasks:
+            row |= {"status": "skipped", "flags": "", "error": "no tasks to hold"}
+            return Outcome(case.name, row, {})
         files: dict[str, bytes] = {}
         if case.simulate:
-            simulated, files = _simulate(problem, case.solver)
-            row |= simulated
+            outcomes, files = _simulate(problem, case.solver)
         else:
-            row |= static_outcomes(problem, case.solver)
-        return Outcome(case.name, True, {**row, "status": "ok", "error": ""}, files)
+            outcomes = static_outcomes(problem, case.solver)
+        flags = outcomes.pop("flags")
+        status = "flagged" if flags else "ok"
+        return Outcome(case.name, {**row, **outcomes, "status": status, "flags": flags}, files)
     except CasadiPostureError as error:
-        reason = str(error)
+        reason, story = str(error), str(error)
     except Exception as error:  # a batch records any failure and carries on
-        reason = f"{type(error).__name__}: {error} ({traceback.format_exc(limit=-1).strip()})"
+        reason = one_line(f"{type(error).__name__}: {error}")
+        story = traceback.format_exc()
     described = {k: v for k, v in asdict(case).items() if k != "text"}
-    failure = json.dumps({"case": described, "error": reason}, indent=2).encode()
-    return Outcome(
-        case.name, False, {**row, "status": "failed", "error": reason}, {"failure.json": failure}
-    )
+    failure = dumps({"case": described, "error": reason, "traceback": story}).encode()
+    row |= {"status": "failed", "flags": "", "error": reason}
+    return Outcome(case.name, row, {"failure.json": failure})
+
+
+def one_line(text: str) -> str:
+    """The first line of ``text``, at most ``REASON_CHARACTERS`` long."""
+    line = text.strip().splitlines()[0] if text.strip() else "unknown error"
+    return line if len(line) <= REASON_CHARACTERS else line[: REASON_CHARACTERS - 3] + "..."
 
 
 def static_outcomes(problem: Problem, solver: str | None) -> dict[str, Any]:
-    """Outcomes from torques alone at the solved start posture: each half-joint's load and
-    maximum holding time, and the limiting group (the shortest one)."""
-    q = problem.posture
+    """Outcomes from torques alone at the solved start posture: whether level 1 was reached,
+    each half-joint's load and endurance, the limiting group, and the flags."""
+    q, flags, columns = problem.posture, [], {}
     if problem.tasks:
         name = solver or problem.spec.solver.name
-        q = make_solver(name, problem.hierarchy(), problem.spec.solver).solve(q).q
-    loads = problem.torque_model().evaluate(q).load_pct_mvc
-    model = endurance_model(problem.spec.fatigue.endurance)
-    return _endurance_columns(
-        {
-            half.name: (
-                float(loads[k]),
-                half_joint_endurance_s(model, float(loads[k]), half.region),
+        hierarchy = problem.hierarchy()
+        result = make_solver(name, hierarchy, problem.spec.solver).solve(q)
+        q = result.q
+        unit = hierarchy.level_units()[0]
+        columns = _reach_columns(result.achieved[0], float(result.residuals[0]), unit)
+        if not result.success:
+            flags.append(f"the {name} solver failed: {result.status}")
+        if not result.achieved[0]:
+            flags.append(
+                f"level 1 not reached: residual {result.residuals[0]:.3g} {unit} > "
+                f"{ACHIEVED_TOLERANCE:g} {unit}"
             )
-            for k, half in enumerate(problem.body.half_joints)
-        }
-    )
+    groups = group_loads(problem, problem.torque_model().evaluate(q))
+    over = [g.name for g in groups if g.over_strength]
+    if over:
+        flags.append(f"over strength at the start: {', '.join(over)}")
+    start = {g.name: (g.load_pct_mvc, g.endurance_s) for g in groups}
+    return columns | _endurance_columns(start) | {"flags": "; ".join(flags)}
+
+
+def _reach_columns(reached: bool, residual: float, unit: str) -> dict[str, Any]:
+    return {"reached": reached, f"residual_level1_{unit.replace(', ', '_')}": residual}
 
 
 def _endurance_columns(groups: dict[str, tuple[float, float]]) -> dict[str, Any]:
-    """Columns of each half-joint's start load [%MVC] and endurance [min] (from seconds),
-    and the limiting group: the one with the shortest endurance."""
+    """Columns of each half-joint's start load [%MVC] and endurance [min] (empty: unlimited),
+    the groups over strength, and the limiting group at the start: the one with the shortest
+    endurance (empty when no group tires)."""
     row: dict[str, Any] = {}
     for name, (load, seconds) in groups.items():
         row[f"initial_load_{name}_pct_mvc"] = load
         row[f"initial_endurance_{name}_min"] = seconds / 60
-    limiting = min(groups, key=lambda name: groups[name][1])
-    return row | {"limiting_group": limiting, "limiting_endurance_min": groups[limiting][1] / 60}
+    tiring = [name for name, (load, seconds) in groups.items() if math.isfinite(seconds)]
+    limiting = min(tiring, key=lambda n: (groups[n][1], -groups[n][0]), default=None)
+    over = [name for name, (load, _) in groups.items() if load > STRENGTH_PCT_MVC]
+    return row | {
+        "over_strength_at_start": "+".join(over),
+        "limiting_group_at_start": limiting or "",
+        "limiting_endurance_at_start_min": None if limiting is None else groups[limiting][1] / 60,
+    }
 
 
 def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dict[str, bytes]]:
@@ -177,12 +235,13 @@ def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dic
     from .simulation import simulate
 
     result = simulate(problem, solver)
+    if result.stop == "interrupted":
+        raise KeyboardInterrupt
     report = summary(result)
     with tempfile.TemporaryDirectory() as folder:
         written = write_results(result, Path(folder)) + plot_simulation(result, Path(folder))
         files = {p.name: p.read_bytes() for p in written}
-    lost = report["task_lost"]
-    first = report["first_to_fatigue"]
+    task, first, exhausted = report["task"], report["first_to_fatigue"], report["exhausted_group"]
     start = {
         g["half_joint"]: (
             g["initial_load_pct_mvc"],
@@ -190,15 +249,25 @@ def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dic
         )
         for g in report["half_joints"]
     }
-    row: dict[str, Any] = _endurance_columns(start) | {
-        "simulated_s": report["simulated_s"],
-        "first_to_fatigue": first["half_joint"] if first else "",
-        "first_fatigue_s": first["time_s"] if first else None,
-        "fatigue_recovery_cycles": report["fatigue_recovery_cycles"],
-        "task_lost": lost is not None,
-        "task_held_s": lost["time_s"] if lost else report["simulated_s"],
-        "ik_failures": report["solver_statistics"]["ik_failures"],
-    }
+    row: dict[str, Any] = (
+        _reach_columns(task["held_at_start"], task["level1_residual_at_start"], task["level1_unit"])
+        | _endurance_columns(start)
+        | {
+            "simulated_s": report["simulated_s"],
+            "stop": report["stop"],
+            "first_to_fatigue": first["half_joint"] if first else "",
+            "first_fatigue_s": first["time_s"] if first else None,
+            "exhausted_group": exhausted["half_joint"] if exhausted else "",
+            "exhausted_s": exhausted["time_s"] if exhausted else None,
+            "fatigue_recovery_cycles": report["fatigue_recovery_cycles"],
+            "task_held_s": task["held_s"],
+            "task_held_is_lower_bound": task["held_s_is_lower_bound"],
+            "task_lost_reason": task["lost"]["reason"] if task["lost"] else "",
+            "ik_failures": report["solver_statistics"]["ik_failures"],
+            "ik_fallbacks": report["solver_statistics"]["ik_fallbacks"],
+            "flags": "; ".join(report["flags"]),
+        }
+    )
     for group in report["half_joints"]:
         row[f"fatigue_threshold_{group['half_joint']}_s"] = group["first_fatigue_threshold_s"]
     recoveries = report["recovery_postures"]
@@ -215,64 +284,131 @@ def run_batch(
     scheduler: str | None = None,
     resume: bool = False,
     quiet: bool = False,
+    describe: dict[str, Any] | None = None,
 ) -> BatchReport:
     """Run ``cases`` into ``out/cases/<name>/`` and write ``out/summary.csv`` (and
-    ``summary.parquet`` when pyarrow is installed)."""
+    ``summary.parquet`` when pyarrow is installed).
+
+    ``out/run.json`` records the run (``describe``: what the user asked for, plus each
+    case's fingerprint and the tool's version); ``resume`` continues only the same run,
+    keeps its finished cases and runs again the failed ones. Ctrl-C stops the run within
+    a second or two, keeps every finished case, cancels the rest and returns with
+    ``interrupted``.
+    """
     names = [c.name for c in cases]
     if len(set(names)) != len(names):
         raise ProblemError(None, "cases", names, "unique case names")
     folder = out / CASES
-    done = (
-        {p.name for p in folder.iterdir() if p.is_dir() and not p.name.startswith(".")}
-        if folder.exists()
-        else set()
-    )
-    if done and not resume:
+    record = {
+        "tool": {"name": "casadi_posture", "version": __version__},
+        **(describe or {}),
+        "cases": {c.name: c.fingerprint() for c in cases},
+    }
+    finished = _finished(folder)
+    if finished and not resume:
         raise ProblemError(
-            None,
-            "--out",
-            str(out),
-            "a folder without earlier results, or --resume to continue them",
+            out, "--out", MISSING, "a folder without earlier results, or --resume to continue them"
         )
+    if resume and finished:
+        _same_run(out, record)
     folder.mkdir(parents=True, exist_ok=True)
+    (out / RUN).write_text(dumps(record) + "\n")
     for stale in folder.glob(".tmp-*"):
         shutil.rmtree(stale, ignore_errors=True)
-    todo = [c for c in cases if c.name not in done]
+    todo = [c for c in cases if finished.get(c.name) in (None, "failed")]
     bar = tqdm(
         total=len(todo), unit="case", file=sys.stderr, disable=quiet or not sys.stderr.isatty()
     )
-    for outcome in _outcomes(todo, jobs, scheduler):
-        _store(outcome, folder)
-        bar.update(1)
+    interrupted = False
+    with interrupt.deferred():
+        try:
+            for outcome in _outcomes(todo, jobs, scheduler):
+                _store(outcome, folder)
+                bar.update(1)
+        except KeyboardInterrupt:
+            interrupted = True
     bar.close()
-    rows = sorted(
-        (
-            json.loads((p / ROW).read_text())
-            for p in folder.iterdir()
-            if p.is_dir() and not p.name.startswith(".")
-        ),
-        key=lambda r: r["case"],
-    )
+    rows = sorted((_row(p) for p in folder.iterdir() if _is_case(p)), key=lambda r: r["case"])
     summary = write_summary(rows, out)
-    return BatchReport(rows, len(todo), len(cases) - len(todo), summary)
+    return BatchReport(rows, len(todo), len(cases) - len(todo), summary, interrupted)
+
+
+def _is_case(path: Path) -> bool:
+    return path.is_dir() and not path.name.startswith(".")
+
+
+def _row(path: Path) -> dict[str, Any]:
+    return json.loads((path / ROW).read_text())
+
+
+def _finished(folder: Path) -> dict[str, str]:
+    """The status of every case folder already in ``folder``, by case name."""
+    if not folder.exists():
+        return {}
+    return {p.name: _row(p)["status"] for p in folder.iterdir() if _is_case(p)}
+
+
+def _same_run(out: Path, record: dict[str, Any]) -> None:
+    """Refuse to resume a folder that holds another run."""
+    try:
+        earlier = json.loads((out / RUN).read_text())
+    except (OSError, ValueError):
+        earlier = None
+    if earlier == json.loads(dumps(record)):
+        return
+    what = "no record of its run (run.json)" if earlier is None else "a different run"
+    raise ProblemError(
+        out,
+        "--resume",
+        MISSING,
+        f"the same run as before, but the folder holds {what}: other problem files or "
+        "texts, varied keys or values, solver or tool version; use a new --out",
+    )
 
 
 def _outcomes(todo: list[Case], jobs: int, scheduler: str | None) -> Iterator[Outcome]:
+    """Outcomes as cases finish; raises ``KeyboardInterrupt`` on Ctrl-C, pending work
+    cancelled and worker processes stopped."""
     if scheduler is not None:
         yield from _dask(todo, scheduler)
     elif jobs <= 1 or len(todo) <= 1:
-        yield from map(run_case, todo)
+        for case in todo:
+            if interrupt.requested():
+                raise KeyboardInterrupt
+            yield run_case(case)
     else:
-        context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-            for future in as_completed([pool.submit(run_case, c) for c in todo]):
+        yield from _processes(todo, jobs)
+
+
+def _processes(todo: list[Case], jobs: int) -> Iterator[Outcome]:
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(
+        max_workers=jobs, mp_context=context, initializer=interrupt.ignore_in_worker
+    )
+    pending = {pool.submit(run_case, c) for c in todo}
+    try:
+        while pending:
+            done, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+            for future in done:
                 yield future.result()
+            if interrupt.requested():
+                raise KeyboardInterrupt
+    finally:
+        if pending:
+            for future in pending:
+                future.cancel()
+            for process in multiprocessing.active_children():
+                process.terminate()
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+#: How often [s] a waiting batch looks for Ctrl-C.
+POLL_S = 0.1
 
 
 def _dask(todo: list[Case], scheduler: str) -> Iterator[Outcome]:
     try:
         from distributed import Client
-        from distributed import as_completed as completed
     except ImportError:
         raise ProblemError(
             None, "--scheduler", scheduler, "Dask installed: pip install 'casadi_posture[dask]'"
@@ -284,9 +420,20 @@ def _dask(todo: list[Case], scheduler: str) -> Iterator[Outcome]:
             None, "--scheduler", scheduler, f"the address of a running Dask scheduler ({error})"
         ) from None
     with client:
-        futures = client.map(run_case, todo, pure=False)
-        for future in completed(futures):
-            yield future.result()
+        pending = set(client.map(run_case, todo, pure=False))
+        try:
+            while pending:
+                done = {f for f in pending if f.done()}
+                pending -= done
+                for future in done:
+                    yield future.result()
+                if interrupt.requested():
+                    raise KeyboardInterrupt
+                if not done:
+                    time.sleep(POLL_S)
+        finally:
+            if pending:
+                client.cancel(list(pending))
 
 
 def _store(outcome: Outcome, folder: Path) -> None:
@@ -294,7 +441,7 @@ def _store(outcome: Outcome, folder: Path) -> None:
     staging = Path(tempfile.mkdtemp(prefix=f".tmp-{outcome.name}-", dir=folder))
     for name, content in outcome.files.items():
         (staging / name).write_bytes(content)
-    (staging / ROW).write_text(json.dumps(_plain(outcome.row), indent=2, allow_nan=False) + "\n")
+    (staging / ROW).write_text(dumps(outcome.row) + "\n")
     target = folder / outcome.name
     if target.exists():
         shutil.rmtree(target)
@@ -302,7 +449,10 @@ def _store(outcome: Outcome, folder: Path) -> None:
 
 
 def write_summary(rows: Sequence[dict[str, Any]], out: Path) -> Path:
-    """``summary.csv`` (and ``.parquet`` when pyarrow is installed), written atomically."""
+    """``summary.csv`` (and ``.parquet`` when pyarrow is installed), written atomically.
+
+    Empty cells (Parquet nulls) mean: unlimited for an endurance, never for a time, none
+    for a group or a reason."""
     columns = list(LEADING) + sorted({k for r in rows for k in r} - set(LEADING))
     path = out / "summary.csv"
     staging = path.with_suffix(".csv.tmp")
@@ -316,25 +466,14 @@ def write_summary(rows: Sequence[dict[str, Any]], out: Path) -> Path:
         import pyarrow.parquet as pq
     except ImportError:
         return path
-    table = pa.Table.from_pylist([{k: r.get(k) for k in columns} for r in rows])
+    table = pa.Table.from_pylist([{k: plain(r.get(k)) for k in columns} for r in rows])
     pq.write_table(table, str(path.with_suffix(".parquet.tmp")))
     os.replace(path.with_suffix(".parquet.tmp"), path.with_suffix(".parquet"))
     return path
 
 
-def _plain(row: dict[str, Any]) -> dict[str, Any]:
-    """JSON-able row: infinities as None, numpy scalars as Python numbers."""
-    out = {}
-    for key, value in row.items():
-        if isinstance(value, np.generic):
-            value = value.item()
-        if isinstance(value, float) and not math.isfinite(value):
-            value = None
-        out[key] = value
-    return out
-
-
 def _cell(value: Any) -> Any:
+    value = plain(value)
     if value is None:
         return ""
     if isinstance(value, float):

@@ -39,7 +39,16 @@ class FatigueModel(Protocol):
         ...
 
     def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
-        """Fatigue level per half-joint (1.0 = exhausted) at the current loads [%MVC]."""
+        """Fatigue level per half-joint in [0, 1] (1.0 = exhausted) at the current loads [%MVC]."""
+        ...
+
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+        """Time [s] from rest to a fatigue level of 1 under each constant load [%MVC]: the static
+        endurance by the same rule as :meth:`step` (``inf`` where no fatigue accumulates)."""
+        ...
+
+    def rule(self) -> str:
+        """One line saying when this model gives an unlimited endurance."""
         ...
 
     def parameters(self) -> list[Parameter]:
@@ -147,8 +156,24 @@ class HoldingTimeFatigue:
         return np.where(load > self._threshold.value, fatigue + dt_s / endurance_s, recovered)
 
     def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
-        """The fatigue ``F`` itself (``ht/mht`` of paper eq. 7 for a constant load)."""
-        return np.array(state, dtype=float)
+        """The fatigue ``F`` itself (``ht/mht`` of paper eq. 7 for a constant load), at most 1:
+        a step may carry ``F`` past exhaustion, which is 1."""
+        return np.minimum(np.asarray(state, dtype=float), 1.0)
+
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+        """The endurance model's time [s] above ``T_0``; ``inf`` at or below it, where
+        :meth:`step` accumulates no fatigue."""
+        load = np.asarray(load_pct_mvc, dtype=float)
+        accumulates = load > self._threshold.value
+        seconds = self.endurance.endurance_time_s(np.where(accumulates, load, 100.0), region)
+        return np.where(accumulates, seconds, np.inf)
+
+    def rule(self) -> str:
+        """``holding_time`` with its endurance model and ``T_0``."""
+        return (
+            f"holding_time, {self.endurance.name} endurance: unlimited at or below "
+            f"T_0 = {self._threshold.value:g} %MVC"
+        )
 
     def parameters(self) -> list[Parameter]:
         """Endurance model, ``T_0``, ``r_rest`` and ``R_j`` of the regions in use."""
@@ -286,9 +311,13 @@ class ThreeCompartmentFatigue:
         """Time [s] from rest to the 3CC failure (``MA + MR < TL``) under each constant load [%MVC].
 
         Explicit Euler with step ``dt_s`` (default ``max_substep_s``), first step count at
-        which the failure holds. ``inf`` if it does not happen within ``horizon_s`` (default
-        ``fatigue.numerics.endurance_horizon``), and at once for loads at or below the
-        sustainable level ``100·R/(R + F)``, where ``MF ≤ F·TL/R ≤ 100 − TL`` for ever.
+        which the failure holds, up to ``horizon_s`` (default
+        ``fatigue.numerics.endurance_horizon``). Beyond it, the sustained phase (MA = TL) has
+        the closed form ``MF(t) = (F·TL/R)(1 − exp(−R·t))``, which reaches ``100 − TL`` at
+        ``t = −ln(1 − R·(100 − TL)/(F·TL))/R`` (within 1 % of Euler: it leaves out the
+        seconds-long transients of MA). ``inf`` for
+        loads at or below the sustainable level ``100·R/(R + F)``, where
+        ``MF ≤ F·TL/R ≤ 100 − TL`` for ever.
         """
         dt = self.max_substep_s if dt_s is None else dt_s
         horizon = self._horizon.value if horizon_s is None else horizon_s
@@ -309,7 +338,22 @@ class ThreeCompartmentFatigue:
             failed = running & (state[:, 0] + state[:, 1] < target)
             times[failed] = steps * dt
             running &= ~failed
+        ratio = recovery_rate * (PERCENT - target[running]) / (fatigue_rate * target[running])
+        times[running] = np.maximum(-np.log1p(-ratio) / recovery_rate, horizon)
         return times.reshape(load.shape)
+
+    def rule(self) -> str:
+        """``3cc_r`` and its sustainable loads."""
+        levels = ", ".join(
+            f"{region} {PERCENT * r / (r + f):.1f}"
+            for region, r, f in zip(
+                self._recovery_rates,
+                (p.value for p in self._recovery_rates.values()),
+                (p.value for p in self._fatigue_rates.values()),
+                strict=True,
+            )
+        )
+        return f"3cc_r: unlimited at or below the sustainable load ({levels} %MVC)"
 
     def parameters(self) -> list[Parameter]:
         """Gains, ``r_rest``, ``F`` and ``R`` of the regions in use, and the Euler substep."""

@@ -37,7 +37,10 @@ EventKind = Literal[
     "constraint_on",
     "constraint_off",
     "task_not_held",
+    "over_strength",
     "exhausted",
+    "solver_fallback",
+    "interrupted",
 ]
 
 

@@ -40,6 +40,15 @@ class NullspaceOptions:
     step is below ``tolerance`` [rad] or ``max_iterations`` is reached. On an active
     inequality the activation slack ``limit_slack`` lets the posture chatter by about
     2e-12 rad, so the tolerance must stay well above it.
+
+    Stall (SPEC §4): an inequality that conflicts with a higher level makes the recursion
+    limit-cycle. The iteration stops with status ``stalled`` when ``stall_iterations``
+    iterations in a row bring no progress, or when it comes to rest at a posture worse
+    than one it passed: progress is a lexicographic decrease of (inequality violation,
+    level-1 residual, level-2 residual, ...), each by more than 1e-9 relative plus 1e-10
+    absolute (task units: numerical noise around an achieved level is about 1e-13). A
+    converging run improves some level at every iteration until its step is below
+    ``tolerance`` (4 to 145 iterations measured at 2 to 42 DOF).
     """
 
     damping: float | tuple[float, ...] = 1e-3
@@ -47,6 +56,7 @@ class NullspaceOptions:
     tolerance: float = 1e-10
     max_iterations: int = 1000
     limit_slack: float = 1e-12
+    stall_iterations: int = 30
 
 
 def _row_projector(jt: ca.SX, tolerance: float) -> ca.SX:
@@ -73,6 +83,17 @@ def _clamped_errors(hierarchy: TaskHierarchy, level: int) -> ca.SX:
         scale = ca.fmin(1.0, task.step_limit / ca.fmax(ca.norm_2(e), _TINY))
         parts.append(-scale * e)
     return ca.vertcat(*parts)
+
+
+def _better(merit: np.ndarray, best: np.ndarray) -> bool:
+    """Whether ``merit`` (violation, level residuals) is lexicographically below ``best``."""
+    for value, reference in zip(merit, best, strict=True):
+        margin = 1e-9 * reference + 1e-10
+        if value < reference - margin:
+            return True
+        if value > reference + margin:
+            return False
+    return False
 
 
 class NullspaceSolver:
@@ -116,13 +137,15 @@ class NullspaceSolver:
             active = ca.fmax(active, use * violated)
         q_next = ca.fmin(ca.fmax(q + dq, lower), upper)
         step = ca.mmax(ca.fabs(q_next - q))
+        violation = use * ca.fmax(ca.dot(a, q) - b, 0)
+        norms = [ca.norm_2(e) for e in h.residuals]
         packed = ca.vertcat(q, h.p, a, b, use)
         return ca.Function(
             "nullspace_iteration",
             [packed],
-            [ca.vertcat(q_next, step)],
+            [ca.vertcat(q_next, step, violation, *norms)],
             ["q_targets_a_b_use"],
-            ["q_next_step"],
+            ["q_next_step_merit"],
         )
 
     def solve(
@@ -141,13 +164,21 @@ class NullspaceSolver:
         limit = max_iterations or self.options.max_iterations
         packed = np.concatenate([np.clip(q0, body.lower, body.upper), h.targets, a, [b, use]])
         n = body.n
-        status, iterations = "max_iterations", 0
+        status, iterations, best, since = "max_iterations", 0, None, 0
         while iterations < limit:
             iterations += 1
             out = self.iteration(packed).full().ravel()
+            merit = out[n + 1 :]
+            if best is None or _better(merit, best):
+                best, since = merit, 0
+            else:
+                since += 1
             packed[:n] = out[:n]
             if out[n] < self.options.tolerance:
-                status = "converged"
+                status = "converged" if since == 0 or not _better(best, merit) else "stalled"
+                break
+            if since >= self.options.stall_iterations:
+                status = "stalled"
                 break
         q = packed[:n].copy()
         at_limits, active = active_constraints(body, q, inequality)

@@ -19,7 +19,7 @@ from .anthropometry import SegmentInertia, segment_inertia
 from .body import BodyModel
 from .endurance import endurance_model
 from .errors import MISSING, ProblemError
-from .fatigue import fatigue_model
+from .fatigue import FatigueModel, fatigue_model
 from .hierarchy import TaskHierarchy
 from .loads import Load
 from .models import MODELS
@@ -34,6 +34,7 @@ from .schema import (
     PostureTask,
     ProblemSpec,
     Task,
+    passive_model_tag,
 )
 from .strength import ConstantStrength, Strength, TabulatedStrength, default_strength
 from .tasks import tasks_from_specs
@@ -42,7 +43,8 @@ from .torques import TorqueModel
 
 @dataclass(frozen=True)
 class Problem:
-    """A validated problem: the body, its torque model inputs, the posture [rad] and settings."""
+    """A validated problem: the body, its torque model inputs, the posture [rad], settings and
+    the fatigue model (stateless: one state per simulation)."""
 
     path: Path
     spec: ProblemSpec
@@ -52,6 +54,7 @@ class Problem:
     loads: tuple[Load, ...]
     posture: np.ndarray
     parameters: tuple[Parameter, ...]
+    fatigue: FatigueModel
 
     @property
     def tasks(self) -> list[Task]:
@@ -102,6 +105,11 @@ def load_problem(
         raw = tomllib.loads(read_problem_text(path) if text is None else text)
     except tomllib.TOMLDecodeError as error:
         raise ProblemError(path, None, None, f"valid TOML ({error})") from None
+    except RecursionError:
+        raise ProblemError(
+            path, None, None, f"valid TOML nested at most {MAX_NESTING} deep"
+        ) from None
+    _check_nesting(raw, path)
     raw = apply(raw, overrides or {}, path)
     try:
         spec = ProblemSpec.model_validate(raw)
@@ -113,6 +121,30 @@ def load_problem(
         if error.file is None:
             raise ProblemError(path, error.key, error.value, error.expected) from None
         raise
+
+
+#: Tables and arrays nested deeper than this are refused before validation.
+MAX_NESTING = 16
+
+
+def _check_nesting(raw: Any, path: Path) -> None:
+    """Refuse data nested deeper than ``MAX_NESTING`` (iteratively: no recursion to exhaust)."""
+    stack = [(raw, 0, "")]
+    while stack:
+        node, depth, key = stack.pop()
+        if depth > MAX_NESTING:
+            expected = f"tables and arrays nested at most {MAX_NESTING} deep"
+            raise ProblemError(path, key or None, MISSING, expected)
+        items = (
+            node.items()
+            if isinstance(node, dict)
+            else enumerate(node)
+            if isinstance(node, list)
+            else ()
+        )
+        for name, child in items:
+            part = f"[{name}]" if isinstance(name, int) else (f".{name}" if key else name)
+            stack.append((child, depth + 1, key + part))
 
 
 def resolve(spec: ProblemSpec, path: Path) -> Problem:
@@ -181,7 +213,7 @@ def resolve(spec: ProblemSpec, path: Path) -> Problem:
     unique: dict[str, Parameter] = {}
     for record in records:
         unique.setdefault(record.name, record)
-    return Problem(path, spec, body, passive, strength, loads, q, tuple(unique.values()))
+    return Problem(path, spec, body, passive, strength, loads, q, tuple(unique.values()), fatigue)
 
 
 def _override_segment(inertia: SegmentInertia, override: Any, path: Path) -> SegmentInertia:
@@ -326,11 +358,34 @@ def _problem_error(path: Path, error: ValidationError, raw: dict[str, Any]) -> P
         ctx = first.get("ctx", {})
         n = ctx.get("min_length") if first["type"] == "too_short" else ctx.get("max_length")
         message = f"{'at least' if first['type'] == 'too_short' else 'at most'} {n} items"
+    elif first["type"] in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
+        message += _unit_of(key)
+    elif first["type"] == "finite_number":
+        message = "a finite number" + (f" [{_unit_of(key).strip()}]" if _unit_of(key) else "")
     more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
     value = first.get("input", MISSING) if first["type"] != "missing" else MISSING
     if isinstance(value, dict):
         value = MISSING
     return ProblemError(path, key, value, message + more)
+
+
+#: Units named by the suffix of a key, for range messages.
+_UNITS = {
+    "_m": " m (metres: a position in cm or mm is a unit slip)",
+    "_deg": " deg",
+    "_kg": " kg",
+    "_N": " N",
+    "_Nm": " N·m",
+    "_s": " s",
+    "_pct_mvc": " %MVC",
+    "_per_rad": " 1/rad",
+}
+
+
+def _unit_of(key: str) -> str:
+    """The unit a key's name carries (``tasks[0].point_m[1]`` -> metres), or ''."""
+    name = key.rsplit(".", 1)[-1].split("[", 1)[0]
+    return next((unit for suffix, unit in _UNITS.items() if name.endswith(suffix)), "")
 
 
 def _key(loc: list[Any], raw: dict[str, Any]) -> str:
@@ -344,7 +399,7 @@ def _key(loc: list[Any], raw: dict[str, Any]) -> str:
         if (
             isinstance(node, dict)
             and part not in node
-            and part in (node.get("kind"), node.get("model"))
+            and part in (node.get("kind"), passive_model_tag(node))
         ):
             continue
         text += f".{part}" if text else str(part)

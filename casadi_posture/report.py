@@ -19,11 +19,18 @@ def fmt(value: Any, digits: int = 3) -> str:
     return str(value)
 
 
-def table(headers: Sequence[str], rows: Sequence[Sequence[Any]], digits: int = 3) -> str:
-    """Columns padded to their widest cell; text left-aligned, numbers right-aligned."""
+def table(
+    headers: Sequence[str],
+    rows: Sequence[Sequence[Any]],
+    digits: int = 3,
+    right: set[int] | None = None,
+) -> str:
+    """Columns padded to their widest cell; text left-aligned, numbers (and the columns
+    listed in ``right``) right-aligned."""
     cells = [[fmt(v, digits) for v in row] for row in rows]
     numeric = [
-        all(isinstance(row[i], (int, float)) or row[i] is None for row in rows)
+        i in (right or set())
+        or all(isinstance(row[i], (int, float)) or row[i] is None for row in rows)
         for i in range(len(headers))
     ]
     widths = [max([len(h)] + [len(r[i]) for r in cells]) for i, h in enumerate(headers)]

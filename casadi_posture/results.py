@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import csv
-import json
 import math
 import platform
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -14,39 +14,161 @@ import numpy as np
 
 from . import __version__
 from .describe import description
-from .endurance import endurance_model, half_joint_endurance_s
+from .ik import ACHIEVED_TOLERANCE
+from .plain import dumps
 from .simulation import SimulationResult
+from .static import endurance, rule
+
+#: Recovery postures listed on screen; summary.json has them all.
+SHOWN_RECOVERIES = 5
 
 
 def summary(result: SimulationResult) -> dict[str, Any]:
-    """Per half-joint endurance, the first to fatigue, cycles, recovery postures, whether and
-    when the task could no longer be held, and solver statistics (times in s)."""
-    tl, body = result.timeline, result.problem.body
-    settings = result.settings
-    model = endurance_model(result.problem.spec.fatigue.endurance)
+    """What a run found, as plain data (times in s, endurance in min; null: none or unlimited).
+
+    ``task``: whether level 1 was achieved at the start, how long the task was held
+    (``held_s_is_lower_bound`` when the run ended with it still held) and, if it was lost,
+    when and why. ``limiting_group_at_start``: the shortest static endurance at the first
+    posture. ``first_to_fatigue``: the first group at the fatigue threshold.
+    ``exhausted_group``: the group whose exhaustion ended the run. ``flags``: why the answer
+    cannot be used as it is (empty when it can).
+    """
+    tl, problem = result.timeline, result.problem
+    body, settings = problem.body, result.settings
+    ran = tl.time.size > 0
+    simulated = float(tl.time[-1]) if ran else 0.0
     groups = []
     for k, half in enumerate(body.half_joints):
         first = np.flatnonzero(tl.fatigue[:, k] >= settings.fatigue_threshold)
-        load0 = float(tl.load[0, k])
-        initial = half_joint_endurance_s(model, load0, half.region)
+        load0 = float(tl.load[0, k]) if ran else None
+        seconds, verdict = endurance(problem, k, load0) if ran else (None, None)
         groups.append(
             {
                 "half_joint": half.name,
                 "dof": half.dof,
                 "initial_load_pct_mvc": load0,
-                "initial_endurance_min": None if math.isinf(initial) else initial / 60.0,
+                "initial_endurance_min": None if seconds is None else seconds / 60.0,
+                "initial_verdict": verdict,
                 "first_fatigue_threshold_s": float(tl.time[first[0]]) if first.size else None,
-                "max_fatigue": float(tl.fatigue[:, k].max()),
-                "final_fatigue": float(tl.fatigue[-1, k]),
+                "max_fatigue": float(tl.fatigue[:, k].max()) if ran else None,
+                "final_fatigue": float(tl.fatigue[-1, k]) if ran else None,
             }
         )
+    limiting = min(
+        (g for g in groups if g["initial_endurance_min"] is not None and g["initial_load_pct_mvc"]),
+        key=lambda g: (g["initial_endurance_min"], -g["initial_load_pct_mvc"]),
+        default=None,
+    )
     crossings = [e for e in result.events if e.kind == "fatigue_threshold"]
-    lost = next((e for e in result.events if e.kind == "exhausted"), None)
-    names = body.dof_names
-    recoveries = []
+    exhausted = next((e for e in result.events if e.kind == "exhausted"), None)
+    return {
+        "problem": str(problem.path),
+        "solver": result.solver,
+        "strategy": settings.strategy,
+        "r_min": settings.r_min,
+        "fatigue_model": problem.fatigue.name,
+        "endurance_model": problem.spec.fatigue.endurance,
+        "endurance_rule": rule(problem),
+        "stop": result.stop,
+        "duration_s": result.duration_s,
+        "simulated_s": simulated,
+        "task": _task(result),
+        "limiting_group_at_start": None
+        if limiting is None
+        else {
+            "half_joint": limiting["half_joint"],
+            "load_pct_mvc": limiting["initial_load_pct_mvc"],
+            "endurance_min": limiting["initial_endurance_min"],
+        },
+        "first_to_fatigue": None
+        if not crossings
+        else {"half_joint": crossings[0].half_joint, "time_s": crossings[0].time_s},
+        "exhausted_group": None
+        if exhausted is None
+        else {
+            "half_joint": exhausted.half_joint,
+            "time_s": exhausted.time_s,
+            "cause": exhausted.detail.split(":")[0],
+        },
+        "half_joints": groups,
+        "fatigue_recovery_cycles": sum(e.kind == "constraint_off" for e in result.events),
+        "recovery_postures": _recoveries(result),
+        "task_not_held_events": sum(e.kind == "task_not_held" for e in result.events),
+        "over_strength_events": sum(e.kind == "over_strength" for e in result.events),
+        "flags": flags(result),
+        "solver_statistics": {
+            "steps": int(tl.time.size),
+            "steps_by_solver": dict(Counter(tl.solver)),
+            "ik_iterations": result.ik_iterations,
+            "ik_failures": result.ik_failures,
+            "ik_fallbacks": result.ik_fallbacks,
+            "wall_time_s": result.wall_time_s,
+            "ik_time_s": result.ik_time_s,
+            "share_outside_ik": 1.0 - result.ik_time_s / max(result.wall_time_s, 1e-12),
+        },
+    }
+
+
+def _task(result: SimulationResult) -> dict[str, Any]:
+    """Whether and how long the top priority level was held."""
+    tl = result.timeline
+    ran = tl.time.size > 0
+    simulated = float(tl.time[-1]) if ran else 0.0
+    residual0 = float(tl.residuals[0, 0]) if ran else None
+    at_start = ran and residual0 <= ACHIEVED_TOLERANCE
+    exhausted = next((e for e in result.events if e.kind == "exhausted"), None)
+    lost = None
+    if result.stop == "never_held":
+        reason = (
+            f"level 1 ({result.level_names[0]}) not achieved at the start: residual "
+            f"{residual0:.3g} {result.level_units[0]}"
+        )
+        lost = {"time_s": 0.0, "half_joint": None, "reason": reason}
+    elif exhausted is not None:
+        lost = {
+            "time_s": exhausted.time_s,
+            "half_joint": exhausted.half_joint,
+            "reason": f"{exhausted.half_joint} exhausted ({exhausted.detail.split(':')[0]})",
+        }
+    return {
+        "level1": result.level_names[0],
+        "level1_unit": result.level_units[0],
+        "achieved_tolerance": ACHIEVED_TOLERANCE,
+        "level1_residual_at_start": residual0,
+        "held_at_start": bool(at_start),
+        "held_s": 0.0 if not at_start else (lost["time_s"] if lost else simulated),
+        "held_s_is_lower_bound": bool(at_start and lost is None),
+        "lost": lost,
+    }
+
+
+def flags(result: SimulationResult) -> list[str]:
+    """Why the run's answer cannot be used as it is, one line each (empty: it can)."""
+    tl, out = result.timeline, []
+    if result.stop == "interrupted":
+        out.append(f"interrupted at {tl.time[-1] if tl.time.size else 0.0:g} s: a partial run")
+    if result.stop == "never_held":
+        out.append(
+            f"task never held: level 1 not achieved at the start (residual "
+            f"{tl.residuals[0, 0]:.3g} {result.level_units[0]} > {ACHIEVED_TOLERANCE:g} "
+            f"{result.level_units[0]}); "
+            "out of the body's reach or blocked by a joint limit"
+        )
+    start_over = [e for e in result.events if e.kind == "over_strength" and e.time_s == 0.0]
+    if start_over:
+        names = ", ".join(e.half_joint for e in start_over)
+        out.append(f"over strength at the start ({names}): the posture cannot be held at all")
+    if result.ik_failures:
+        out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
+    return out
+
+
+def _recoveries(result: SimulationResult) -> list[dict[str, Any]]:
+    tl, names = result.timeline, result.problem.body.dof_names
+    out = []
     for event in (e for e in result.events if e.kind == "constraint_off"):
         step = int(np.searchsorted(tl.time, event.time_s))
-        recoveries.append(
+        out.append(
             {
                 "time_s": event.time_s,
                 "half_joint": event.half_joint,
@@ -55,31 +177,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
                 "along_line_m": None if tl.along_line is None else float(tl.along_line[step]),
             }
         )
-    return {
-        "problem": str(result.problem.path),
-        "solver": result.solver,
-        "strategy": settings.strategy,
-        "r_min": settings.r_min,
-        "simulated_s": float(tl.time[-1]),
-        "half_joints": groups,
-        "first_to_fatigue": None
-        if not crossings
-        else {"half_joint": crossings[0].half_joint, "time_s": crossings[0].time_s},
-        "fatigue_recovery_cycles": len(recoveries),
-        "recovery_postures": recoveries,
-        "task_lost": None
-        if lost is None
-        else {"time_s": lost.time_s, "half_joint": lost.half_joint, "reason": lost.detail},
-        "task_not_held_events": sum(e.kind == "task_not_held" for e in result.events),
-        "solver_statistics": {
-            "steps": int(tl.time.size),
-            "ik_iterations": result.ik_iterations,
-            "ik_failures": result.ik_failures,
-            "wall_time_s": result.wall_time_s,
-            "ik_time_s": result.ik_time_s,
-            "share_outside_ik": 1.0 - result.ik_time_s / result.wall_time_s,
-        },
-    }
+    return out
 
 
 def write_results(result: SimulationResult, out: Path) -> list[Path]:
@@ -91,8 +189,8 @@ def write_results(result: SimulationResult, out: Path) -> list[Path]:
         writer = csv.writer(handle)
         writer.writerow(["time_s", "event", "half_joint", "detail"])
         writer.writerows([e.time_s, e.kind, e.half_joint, e.detail] for e in result.events)
-    paths[2].write_text(json.dumps(summary(result), indent=2, allow_nan=False) + "\n")
-    paths[3].write_text(json.dumps(manifest(result), indent=2, allow_nan=False) + "\n")
+    paths[2].write_text(dumps(summary(result)) + "\n")
+    paths[3].write_text(dumps(manifest(result)) + "\n")
     return paths
 
 
@@ -107,6 +205,8 @@ def manifest(result: SimulationResult) -> dict[str, Any]:
         "python": platform.python_version(),
         "solver": result.solver,
         "solver_options": problem.spec.solver.model_dump(),
+        "fatigue_model": problem.fatigue.name,
+        "endurance_rule": rule(problem),
         "constraint_settings": {
             **result.settings.__dict__,
             "max_step_deg": math.degrees(result.settings.max_step),
@@ -133,6 +233,7 @@ def _write_timeline(result: SimulationResult, path: Path) -> None:
     header += [f"fatigued_{h}" for h in halves]
     header += ["constraint_owner", "goal_angle_deg", "goal_case"]
     header += [f"residual_level{k + 1}_{u.replace(', ', '_')}" for k, u in enumerate(levels)]
+    header += ["ik_solver"]
     with path.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow(header)
@@ -146,5 +247,5 @@ def _write_timeline(result: SimulationResult, path: Path) -> None:
                 "" if math.isnan(tl.goal[i]) else math.degrees(tl.goal[i]),
                 tl.case[i],
             ]
-            row += list(tl.residuals[i])
+            row += [*tl.residuals[i], tl.solver[i]]
             writer.writerow([f"{v:.10g}" if isinstance(v, float | np.floating) else v for v in row])

@@ -1,11 +1,15 @@
 """The problem-file format (TOML), validated with pydantic; ``problems/README.md`` documents it.
 
 Key names carry their unit (``_m``, ``_kg``, ``_deg``, ``_s``, ``_Nm``,
-``_pct_mvc``); angles in files are degrees. Unknown keys are errors.
+``_pct_mvc``); angles in files are degrees. Unknown keys are errors. Every number
+must be finite and within the physically meaningful range stated here and in
+``problems/README.md``: nan, inf and absurd magnitudes (a position written in
+centimetres, a 1e308 kg load) are refused before anything is computed.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import (
@@ -18,15 +22,51 @@ from pydantic import (
     model_validator,
 )
 
-Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-Pair = Annotated[list[float], Field(min_length=2, max_length=2)]
-Positive = Annotated[float, Field(gt=0)]
-NonNegative = Annotated[float, Field(ge=0)]
-Priority = Annotated[int, Field(ge=1)]
+#: The ranges every number of a problem file must lie in (``problems/README.md``).
+MAX_POSITION_M = 10.0  # a point farther than this from the origin is a unit slip (cm, mm)
+MAX_ANGLE_DEG = 360.0
+MAX_LOAD_MASS_KG = 1000.0
+MAX_FORCE_N = 10_000.0
+MAX_MOMENT_NM = 1_000.0
+MAX_PASSIVE_NM = 1_000.0
+MAX_PASSIVE_RATE_PER_RAD = 50.0  # with angles within ±360°, exp() stays far from overflow
+MIN_STRENGTH_NM, MAX_STRENGTH_NM = 0.1, 2_000.0
+MAX_DURATION_S = 86_400.0
+MIN_TIME_STEP_S, MAX_TIME_STEP_S = 0.01, 60.0
+MAX_STEPS = 100_000
+MAX_SOLVER_ITERATIONS = 100_000
+MIN_TOLERANCE, MAX_TOLERANCE = 1e-14, 1e-2
+MAX_DIRECTION = 1e6
+
+
+def _between(lo: float, hi: float) -> Field:
+    return Field(ge=lo, le=hi)
+
+
+Angle = Annotated[float, _between(-MAX_ANGLE_DEG, MAX_ANGLE_DEG)]
+Coordinate = Annotated[float, _between(-MAX_POSITION_M, MAX_POSITION_M)]
+Position = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+Direction = Annotated[
+    list[Annotated[float, _between(-MAX_DIRECTION, MAX_DIRECTION)]],
+    Field(min_length=3, max_length=3),
+]
+Force = Annotated[
+    list[Annotated[float, _between(-MAX_FORCE_N, MAX_FORCE_N)]], Field(min_length=3, max_length=3)
+]
+Moment = Annotated[
+    list[Annotated[float, _between(-MAX_MOMENT_NM, MAX_MOMENT_NM)]],
+    Field(min_length=3, max_length=3),
+]
+AnglePair = Annotated[list[Angle], Field(min_length=2, max_length=2)]
+Angles3 = Annotated[list[Angle], Field(min_length=3, max_length=3)]
+PassiveMagnitude = Annotated[float, _between(0.0, MAX_PASSIVE_NM)]
+PassiveRate = Annotated[float, _between(0.0, MAX_PASSIVE_RATE_PER_RAD)]
+StrengthValue = Annotated[float, _between(MIN_STRENGTH_NM, MAX_STRENGTH_NM)]
+Priority = Annotated[int, Field(ge=1, le=1000)]
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False)
 
 
 def _increasing(pair: list[float]) -> list[float]:
@@ -36,8 +76,8 @@ def _increasing(pair: list[float]) -> list[float]:
 
 
 def _nonzero(vector: list[float]) -> list[float]:
-    if sum(c * c for c in vector) < 1e-24:
-        raise ValueError("a non-zero vector")
+    if sum(c * c for c in vector) < 1e-18:
+        raise ValueError("a non-zero vector (length at least 1e-9)")
     return vector
 
 
@@ -45,19 +85,19 @@ class ExponentialPassiveSpec(Strict):
     """τp = k1·exp(-k2·(q - q1)) - k3·exp(-k4·(q2 - q)); every key required."""
 
     model: Literal["exponential"] = "exponential"
-    k1_Nm: NonNegative
-    k2_per_rad: NonNegative
-    q1_deg: float
-    k3_Nm: NonNegative
-    k4_per_rad: NonNegative
-    q2_deg: float
+    k1_Nm: PassiveMagnitude
+    k2_per_rad: PassiveRate
+    q1_deg: Angle
+    k3_Nm: PassiveMagnitude
+    k4_per_rad: PassiveRate
+    q2_deg: Angle
 
 
 class NoPassiveSpec(Strict):
     model: Literal["none"]
 
 
-def _passive_model(value: object) -> str:
+def passive_model_tag(value: object) -> str:
     """The passive model's tag; a table without ``model`` is the exponential default."""
     if isinstance(value, dict):
         return value.get("model", "exponential")
@@ -66,27 +106,27 @@ def _passive_model(value: object) -> str:
 
 PassiveSpec = Annotated[
     Annotated[ExponentialPassiveSpec, Tag("exponential")] | Annotated[NoPassiveSpec, Tag("none")],
-    Discriminator(_passive_model),
+    Discriminator(passive_model_tag),
 ]
 
 
 class DofSpec(Strict):
-    range_deg: Pair | None = None
+    range_deg: AnglePair | None = None
     passive: PassiveSpec | None = None
 
     _range = field_validator("range_deg")(lambda v: v if v is None else _increasing(v))
 
 
 class SegmentSpec(Strict):
-    mass_kg: NonNegative | None = None
-    length_m: Positive | None = None
+    mass_kg: Annotated[float, _between(0.0, 300.0)] | None = None
+    length_m: Annotated[float, Field(gt=0, le=2.5)] | None = None
     com_fraction: Annotated[float, Field(ge=0, le=1)] | None = None
 
 
 class StrengthCurveSpec(Strict):
     dof: str
-    angle_deg: list[float] = Field(min_length=2)
-    strength_Nm: list[Positive] = Field(min_length=2)
+    angle_deg: list[Angle] = Field(min_length=2, max_length=1000)
+    strength_Nm: list[StrengthValue] = Field(min_length=2, max_length=1000)
 
     @model_validator(mode="after")
     def _table(self) -> StrengthCurveSpec:
@@ -98,7 +138,7 @@ class StrengthCurveSpec(Strict):
 
 
 class HalfJointSpec(Strict):
-    strength_Nm: Positive | None = None
+    strength_Nm: StrengthValue | None = None
     strength_curve: StrengthCurveSpec | None = None
 
     @model_validator(mode="after")
@@ -111,8 +151,8 @@ class HalfJointSpec(Strict):
 class BodySpec(Strict):
     model: str
     sex: Literal["male", "female"] = "male"
-    stature_m: Annotated[float, Field(gt=0.5, lt=2.5)] = 1.741
-    mass_kg: Annotated[float, Field(gt=10, lt=300)] = 73.0
+    stature_m: Annotated[float, _between(0.5, 2.5)] = 1.741
+    mass_kg: Annotated[float, _between(10.0, 300.0)] = 73.0
     age_years: Annotated[float, Field(ge=18, le=100)] = 30.0
     dofs: dict[str, DofSpec] = {}
     segments: dict[str, SegmentSpec] = {}
@@ -122,9 +162,9 @@ class BodySpec(Strict):
 class LoadSpec(Strict):
     name: str
     at: str
-    mass_kg: NonNegative = 0.0
-    force_N: Vec3 = (0.0, 0.0, 0.0)
-    moment_Nm: Vec3 = (0.0, 0.0, 0.0)
+    mass_kg: Annotated[float, _between(0.0, MAX_LOAD_MASS_KG)] = 0.0
+    force_N: Force = (0.0, 0.0, 0.0)
+    moment_Nm: Moment = (0.0, 0.0, 0.0)
 
 
 class _Task(Strict):
@@ -135,7 +175,7 @@ class _Task(Strict):
 class PositionTask(_Task):
     kind: Literal["position"]
     effector: str
-    target_m: Vec3
+    target_m: Position
 
 
 class LineTask(_Task):
@@ -144,10 +184,10 @@ class LineTask(_Task):
 
     kind: Literal["line"]
     effector: str
-    point_m: Vec3
-    direction: Vec3 | None = None
-    elevation_deg: Annotated[float, Field(ge=-90, le=90)] | None = None
-    azimuth_deg: float | None = None
+    point_m: Position
+    direction: Direction | None = None
+    elevation_deg: Annotated[float, _between(-90.0, 90.0)] | None = None
+    azimuth_deg: Angle | None = None
 
     _direction = field_validator("direction")(lambda v: v if v is None else _nonzero(v))
 
@@ -163,8 +203,8 @@ class LineTask(_Task):
 class PlaneTask(_Task):
     kind: Literal["plane"]
     effector: str
-    point_m: Vec3
-    normal: Vec3
+    point_m: Position
+    normal: Direction
 
     _normal = field_validator("normal")(_nonzero)
 
@@ -174,20 +214,20 @@ class OrientationTask(_Task):
 
     kind: Literal["orientation"]
     segment: str
-    target_rpy_deg: Vec3
+    target_rpy_deg: Angles3
 
 
 class ComTask(_Task):
     """Whole-body centre of mass over a point, in the listed world axes (balance)."""
 
     kind: Literal["com"]
-    target_m: Vec3
+    target_m: Position
     axes: Literal["x", "y", "z", "xy", "xz", "yz", "xyz"] = "xyz"
 
 
 class PostureTask(_Task):
     kind: Literal["posture"]
-    reference_deg: dict[str, float]
+    reference_deg: dict[str, Angle]
 
 
 Task = Annotated[
@@ -204,10 +244,10 @@ class FatigueSpec(Strict):
     strategy: Literal["active", "passive"] = "active"
     r_min: Annotated[float, Field(ge=0, le=1)] = 0.9
     load_threshold_pct_mvc: Annotated[float, Field(ge=0, le=100)] | None = None
-    epsilon_Nm: Positive = 0.05
+    epsilon_Nm: Annotated[float, Field(gt=0, le=100)] = 0.05
     beta: Annotated[float, Field(gt=0, lt=1)] = 0.5
-    max_step_deg: Positive = 1.0
-    alpha_rad_per_Nm2: Annotated[float, Field(lt=0)] = -1e-4
+    max_step_deg: Annotated[float, Field(gt=0, le=30)] = 1.0
+    alpha_rad_per_Nm2: Annotated[float, Field(ge=-1e-2, lt=0)] = -1e-4
 
     @model_validator(mode="after")
     def _thresholds(self) -> FatigueSpec:
@@ -222,8 +262,8 @@ class FatigueSpec(Strict):
 
 
 class SimulationSpec(Strict):
-    duration_s: Positive = 600.0
-    time_step_s: Positive = 1.0
+    duration_s: Annotated[float, Field(gt=0, le=MAX_DURATION_S)] = 600.0
+    time_step_s: Annotated[float, _between(MIN_TIME_STEP_S, MAX_TIME_STEP_S)] = 1.0
 
     @model_validator(mode="after")
     def _step(self) -> SimulationSpec:
@@ -231,16 +271,26 @@ class SimulationSpec(Strict):
             raise ValueError(
                 f"time_step_s <= duration_s, got {self.time_step_s:g} s > {self.duration_s:g} s"
             )
+        if self.steps > MAX_STEPS:
+            raise ValueError(
+                f"at most {MAX_STEPS} steps (duration_s / time_step_s), got {self.steps}: "
+                "a longer time step or a shorter duration"
+            )
         return self
+
+    @property
+    def steps(self) -> int:
+        """Steps of the run, the start included."""
+        return math.floor(self.duration_s / self.time_step_s + 1e-9) + 1
 
 
 class SolverSpec(Strict):
     """IK solver and its options; an option left out takes the solver's own default."""
 
     name: Literal["nullspace", "lexicographic"] = "lexicographic"
-    max_iterations: Annotated[int, Field(ge=1)] | None = None
-    tolerance: Positive | None = None
-    damping: NonNegative | None = None
+    max_iterations: Annotated[int, Field(ge=1, le=MAX_SOLVER_ITERATIONS)] | None = None
+    tolerance: Annotated[float, _between(MIN_TOLERANCE, MAX_TOLERANCE)] | None = None
+    damping: Annotated[float, _between(0.0, 10.0)] | None = None
 
     @model_validator(mode="after")
     def _damping(self) -> SolverSpec:
@@ -255,7 +305,7 @@ class ProblemSpec(Strict):
     title: str = ""
     description: str = ""
     body: BodySpec
-    posture_deg: dict[str, float] = {}
+    posture_deg: dict[str, Angle] = {}
     loads: list[LoadSpec] = []
     tasks: list[Task] = []
     fatigue: FatigueSpec = FatigueSpec()

@@ -1,9 +1,11 @@
 """Time simulation: hold the tasks, tire, shift to a less tiring posture, recover (SPEC §7).
 
 Per step of simulated time: solve the IK from the last posture with the current
-fatigue constraint; evaluate the torques; update every half-joint's fatigue over
-the step at the new posture's load; apply the hysteresis; build the constraint for
-the next step. Every CasADi object is built once, before the loop.
+fatigue constraint (the other solver takes over a step the first fails or stalls
+on); evaluate the torques; update every half-joint's fatigue over the step at the
+new posture's load (a load above 100 %MVC exhausts the group at once: SPEC §2);
+apply the hysteresis; build the constraint for the next step. Every CasADi object
+is built once, before the loop.
 """
 
 from __future__ import annotations
@@ -11,27 +13,32 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import Literal
 
 import casadi as ca
 import numpy as np
 
-from .endurance import endurance_model
+from . import interrupt
 from .errors import ProblemError
-from .fatigue import fatigue_model
 from .fatigue_constraint import ConstraintSettings, Event, FatigueConstraint
+from .hierarchy import TaskHierarchy
+from .ik import ACHIEVED_TOLERANCE
 from .problem import Problem
-from .solvers import make_solver
+from .solvers import SOLVER_NAMES, Solver, make_solver
+from .static import STRENGTH_PCT_MVC
 from .tasks import Line, Task
 
-#: The top task counts as held while its residual stays below this [m or rad].
-HOLD_TOLERANCE = 1e-4
+#: Why a run ended: it ran its duration, a group was exhausted (or needed more than its
+#: strength), the top task could not be achieved at the start, or Ctrl-C.
+Stop = Literal["completed", "exhausted", "never_held", "interrupted"]
 
 
 @dataclass(frozen=True)
 class Timeline:
     """One row per step: time [s], q [rad], effector [m], torques [N·m] per DOF; load [%MVC],
     fatigue level and hysteresis state per half-joint; the constraint owner (-1: none), the
-    goal angle [rad] and Table 1 case; the residual of each priority level."""
+    goal angle [rad] and Table 1 case; the residual of each priority level; the solver that
+    gave the posture."""
 
     time: np.ndarray
     q: np.ndarray
@@ -47,24 +54,31 @@ class Timeline:
     goal: np.ndarray
     case: list[str]
     residuals: np.ndarray
+    solver: list[str]
 
 
 @dataclass(frozen=True)
 class SimulationResult:
-    """A simulated hold: its tasks, the unit of each level's residual, the timeline, the
-    events and solver statistics (wall times [s])."""
+    """A simulated hold: its tasks, the name and unit of each level, the timeline, the
+    events, why it stopped and solver statistics (wall times [s]). ``ik_failures`` counts
+    steps whose posture no solver could certify; ``ik_fallbacks`` the steps the other solver
+    took over after a failure or stall."""
 
     problem: Problem
     solver: str
     settings: ConstraintSettings
     effector: str
     tasks: tuple[Task, ...]
+    level_names: tuple[str, ...]
     level_units: tuple[str, ...]
     timeline: Timeline
     events: list[Event]
+    stop: Stop
+    duration_s: float
     wall_time_s: float
     ik_time_s: float
     ik_failures: int
+    ik_fallbacks: int
     ik_iterations: int
 
 
@@ -83,124 +97,188 @@ def constraint_settings(problem: Problem) -> ConstraintSettings:
     )
 
 
+class _Recorder:
+    """The timeline's rows as they come: memory grows with the steps actually run."""
+
+    def __init__(self) -> None:
+        self.rows: dict[str, list] = {}
+
+    def add(self, **values: object) -> None:
+        for key, value in values.items():
+            self.rows.setdefault(key, []).append(value)
+
+    def array(self, key: str) -> np.ndarray:
+        return np.asarray(self.rows[key])
+
+
+class _Solvers:
+    """The problem's solver and, built on first need, the other one to fall back to."""
+
+    def __init__(self, name: str, problem: Problem, hierarchy: TaskHierarchy) -> None:
+        self.primary = make_solver(name, hierarchy, problem.spec.solver)
+        self.other_name = next(n for n in SOLVER_NAMES if n != name)
+        self._problem, self._hierarchy = problem, hierarchy
+        self._other: Solver | None = None
+
+    def fallback(self) -> Solver:
+        if self._other is None:
+            spec = self._problem.spec.solver
+            self._other = make_solver(self.other_name, self._hierarchy, spec)
+        return self._other
+
+
 def simulate(problem: Problem, solver: str | None = None) -> SimulationResult:
-    """Simulate the problem's hold for ``simulation.duration_s`` with ``solver``
-    (default: the file's); stops early when a half-joint is exhausted (fatigue 1)."""
+    """Simulate the problem's hold for ``simulation.duration_s`` with ``solver`` (default:
+    the file's).
+
+    Stops early when a half-joint is exhausted (fatigue 1, or a load above its strength,
+    which exhausts it at once), when the top priority level cannot be achieved at the
+    start (the task is never held), or on Ctrl-C (:mod:`casadi_posture.interrupt`): the
+    result then holds the steps run so far and ``stop`` says why. A step whose solver
+    fails or stalls is solved again by the other solver from the same start; the
+    timeline records which solver gave each posture.
+    """
     if not problem.tasks:
         raise ProblemError(problem.path, "tasks", [], "at least one task to hold")
+    with interrupt.deferred():
+        return _run(problem, solver)
+
+
+def _run(problem: Problem, solver: str | None) -> SimulationResult:
     start = time.perf_counter()
     spec, body = problem.spec, problem.body
     name = solver or spec.solver.name
     hierarchy = problem.hierarchy()
-    ik = make_solver(name, hierarchy, spec.solver)
+    solvers = _Solvers(name, problem, hierarchy)
     torque_model = problem.torque_model()
-    regions = [h.region for h in body.half_joints]
-    fatigue = fatigue_model(
-        spec.fatigue.model,
-        regions=regions,
-        endurance=endurance_model(spec.fatigue.endurance),
-        recovery_threshold_pct_mvc=spec.fatigue.load_threshold_pct_mvc,
-    )
+    fatigue = problem.fatigue
     settings = constraint_settings(problem)
     constraint = FatigueConstraint(body, problem.passive, settings)
     effector, line = _tracked(hierarchy)
     position = ca.Function("effector", [body.q], [body.landmark(effector)])
+    names = [h.name for h in body.half_joints]
+    top = hierarchy.level_names()[0]
 
     dt = spec.simulation.time_step_s
-    steps = math.floor(spec.simulation.duration_s / dt + 1e-9) + 1
-    n, m, depth = body.n, 2 * body.n, hierarchy.depth
-    rec = {
-        "q": np.zeros((steps, n)),
-        "effector": np.zeros((steps, 3)),
-        "external": np.zeros((steps, n)),
-        "passive": np.zeros((steps, n)),
-        "active": np.zeros((steps, n)),
-        "load": np.zeros((steps, m)),
-        "fatigue": np.zeros((steps, m)),
-        "fatigued": np.zeros((steps, m), dtype=bool),
-        "owner": np.full(steps, -1),
-        "goal": np.full(steps, np.nan),
-        "residuals": np.zeros((steps, depth)),
-    }
-    cases = [""] * steps
+    record = _Recorder()
     events: list[Event] = []
     state, q, torques = fatigue.initial_state(), problem.posture.copy(), None
-    ik_time, failures, iterations, held, last = 0.0, 0, 0, True, steps
-    for step in range(steps):
+    ik_time, failures, fallbacks, iterations, held = 0.0, 0, 0, 0, True
+    stop: Stop = "completed"
+    for step in range(spec.simulation.steps):
         now = step * dt
+        if interrupt.requested():
+            events.append(Event(now, "interrupted", "", "Ctrl-C: the run stopped here"))
+            stop = "interrupted"
+            break
         planned = constraint.hyperplane(q, torques) if torques is not None else None
         inequality, goal = planned if planned is not None else (None, None)
         tic = time.perf_counter()
-        result = ik.solve(q, inequality)
-        ik_time += time.perf_counter() - tic
-        failures += not result.success
+        result = solvers.primary.solve(q, inequality)
         iterations += result.iterations
-        q = result.q
-        torques = torque_model.evaluate(q)
-        if step > 0:
-            state = fatigue.step(state, torques.load_pct_mvc, dt)
-        levels = fatigue.level(state, torques.load_pct_mvc)
-        events += constraint.update(levels, now)
-        if held and result.residuals[0] > HOLD_TOLERANCE:
+        if not result.success:
+            other = solvers.fallback().solve(q, inequality)
+            iterations += other.iterations
             events.append(
                 Event(
                     now,
-                    "task_not_held",
-                    hierarchy.level_names()[0],
-                    f"level-1 residual {result.residuals[0]:.3g}",
+                    "solver_fallback",
+                    "",
+                    f"{result.solver}: {result.status}; {other.solver}: {other.status}",
                 )
             )
-        held = result.residuals[0] <= HOLD_TOLERANCE
-        for key, value in (
-            ("q", q),
-            ("effector", np.asarray(position(q)).ravel()),
-            ("external", torques.external),
-            ("passive", torques.passive),
-            ("active", torques.active),
-            ("load", torques.load_pct_mvc),
-            ("fatigue", levels),
-            ("fatigued", constraint.fatigued),
-            ("residuals", result.residuals),
-        ):
-            rec[key][step] = value
-        rec["owner"][step] = -1 if constraint.owner is None else constraint.owner
-        if goal is not None:
-            rec["goal"][step], cases[step] = goal.angle, goal.case
+            fallbacks += 1
+            result = other if other.success else result
+        ik_time += time.perf_counter() - tic
+        failures += not result.success
+        q = result.q
+        torques = torque_model.evaluate(q)
+        loads = torques.load_pct_mvc
+        if step > 0:
+            state = fatigue.step(state, loads, dt)
+        levels = fatigue.level(state, loads)
+        over = np.flatnonzero(loads > STRENGTH_PCT_MVC)
+        for k in over:
+            events.append(
+                Event(
+                    now,
+                    "over_strength",
+                    names[k],
+                    f"load {loads[k]:.2f} %MVC exceeds the group's strength",
+                )
+            )
+        levels[over] = 1.0
+        events += constraint.update(levels, now)
+        if not result.achieved[0]:
+            if step == 0:
+                detail = (
+                    f"level 1 not achieved at the start: residual {result.residuals[0]:.3g} "
+                    f"{hierarchy.level_units()[0]} > {ACHIEVED_TOLERANCE:g}; the task is "
+                    "never held"
+                )
+                stop = "never_held"
+            else:
+                detail = f"level-1 residual {result.residuals[0]:.3g}"
+            if held:
+                events.append(Event(now, "task_not_held", top, detail))
+        held = result.achieved[0]
+        record.add(
+            q=q,
+            effector=np.asarray(position(q)).ravel(),
+            external=torques.external,
+            passive=torques.passive,
+            active=torques.active,
+            load=loads,
+            fatigue=levels,
+            fatigued=constraint.fatigued.copy(),
+            owner=-1 if constraint.owner is None else constraint.owner,
+            goal=math.nan if goal is None else goal.angle,
+            case="" if goal is None else goal.case,
+            residuals=result.residuals,
+            solver=result.solver,
+        )
+        if stop == "never_held":
+            break
         if levels.max() >= 1.0:
             worst = int(np.argmax(levels))
+            cause = "load above strength" if worst in over else "fatigue reached 1"
             events.append(
                 Event(
                     now,
                     "exhausted",
-                    body.half_joints[worst].name,
-                    "fatigue reached 1: the task can no longer be held",
+                    names[worst],
+                    f"{cause}: the task can no longer be held",
                 )
             )
-            last = step + 1
+            stop = "exhausted"
             break
+    count = len(record.rows.get("q", []))
+    effector_path = record.array("effector") if count else np.zeros((0, 3))
     along = None
     if line is not None:
         direction = np.asarray(line.direction) / np.linalg.norm(line.direction)
-        along = (rec["effector"][:last] - np.asarray(line.point)) @ direction
+        along = (effector_path - np.asarray(line.point)) @ direction
     timeline = Timeline(
-        np.arange(last) * dt,
-        *(rec[k][:last] for k in ("q", "effector")),
+        np.arange(count) * dt,
+        _rows(record, "q", count, body.n),
+        effector_path,
         along,
         *(
-            rec[k][:last]
-            for k in (
-                "external",
-                "passive",
-                "active",
-                "load",
-                "fatigue",
-                "fatigued",
-                "owner",
-                "goal",
+            _rows(record, k, count, width)
+            for k, width in (
+                ("external", body.n),
+                ("passive", body.n),
+                ("active", body.n),
+                ("load", len(names)),
+                ("fatigue", len(names)),
+                ("fatigued", len(names)),
+                ("owner", None),
+                ("goal", None),
             )
         ),
-        cases[:last],
-        rec["residuals"][:last],
+        list(record.rows.get("case", [])),
+        _rows(record, "residuals", count, hierarchy.depth),
+        list(record.rows.get("solver", [])),
     )
     return SimulationResult(
         problem,
@@ -208,17 +286,28 @@ def simulate(problem: Problem, solver: str | None = None) -> SimulationResult:
         settings,
         effector,
         tuple(t for level in hierarchy.levels for t in level),
+        tuple(hierarchy.level_names()),
         tuple(hierarchy.level_units()),
         timeline,
         events,
+        stop,
+        spec.simulation.duration_s,
         time.perf_counter() - start,
         ik_time,
         failures,
+        fallbacks,
         iterations,
     )
 
 
-def _tracked(hierarchy) -> tuple[str, Line | None]:
+def _rows(record: _Recorder, key: str, count: int, width: int | None) -> np.ndarray:
+    """The recorded rows of ``key`` as one array (an empty one of the right shape if none)."""
+    if count:
+        return record.array(key)
+    return np.zeros((0,) if width is None else (0, width))
+
+
+def _tracked(hierarchy: TaskHierarchy) -> tuple[str, Line | None]:
     """The effector of the highest-priority task that has one, and the first line task."""
     tasks = [t for level in hierarchy.levels for t in level]
     effectors = [t.effector for t in tasks if hasattr(t, "effector")]

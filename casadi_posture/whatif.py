@@ -3,7 +3,9 @@ plots of each outcome against each varied key (SPEC §9)."""
 
 from __future__ import annotations
 
+import hashlib
 import itertools
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -13,24 +15,29 @@ import numpy as np
 from .batch import Case, safe_name
 from .errors import ProblemError
 from .overrides import parse_key, parse_value
-from .problem import read_problem_text
+from .problem import load_problem, read_problem_text
+from .solvers import SOLVER_NAMES
 
 #: Outcomes plotted against every varied key, with their axis labels.
 OUTCOMES = {
     "task_held_s": "task held (s)",
     "first_fatigue_s": "first group at the fatigue threshold (s)",
     "fatigue_recovery_cycles": "fatigue/recovery cycles",
-    "limiting_endurance_min": "endurance of the limiting group at the start (min)",
+    "limiting_endurance_at_start_min": "endurance of the limiting group at the start (min)",
 }
-STATIC_OUTCOMES = ("limiting_endurance_min",)
+STATIC_OUTCOMES = ("limiting_endurance_at_start_min",)
 
 
-def parse_vary(text: str) -> tuple[str, list[Any]]:
-    """``KEY=V1,V2,...`` -> (key, values); commas inside brackets belong to one value."""
+def parse_vary(text: str, problem: str | None = None) -> tuple[str, list[Any]]:
+    """``KEY=V1,V2,...`` -> (key, values); commas inside brackets belong to one value.
+    ``problem`` names the file in error messages."""
     key, sep, values = text.partition("=")
     if not sep or not key or not values:
-        raise ProblemError(None, "--vary", text, "KEY=V1,V2,... such as loads[0].mass_kg=2.5,5")
-    parse_key(key)
+        raise ProblemError(problem, "--vary", text, "KEY=V1,V2,... such as loads[0].mass_kg=2.5,5")
+    try:
+        parse_key(key)
+    except ProblemError as error:
+        raise ProblemError(problem, "--vary", text, error.expected) from None
     parts: list[str] = []
     depth, current = 0, ""
     for char in values:
@@ -43,11 +50,15 @@ def parse_vary(text: str) -> tuple[str, list[Any]]:
             current += char
     parts.append(current)
     if any(not p.strip() for p in parts):
-        raise ProblemError(None, "--vary", text, "no empty value between commas")
+        raise ProblemError(problem, "--vary", text, "no empty value between commas")
     values = [parse_value(p.strip()) for p in parts]
     if any(isinstance(v, float) for v in values):
         values = [float(v) if isinstance(v, int) and not isinstance(v, bool) else v for v in values]
     return key, values
+
+
+#: Largest grid run without an explicit ``max_cases``.
+MAX_CASES = 1000
 
 
 def grid(
@@ -56,19 +67,58 @@ def grid(
     *,
     solver: str | None,
     simulate: bool,
+    max_cases: int = MAX_CASES,
 ) -> list[Case]:
-    """One case per combination of the varied values; ``solver`` may be varied too."""
+    """One case per combination of the varied values; ``solver`` may be varied too.
+
+    Every combination is validated like a problem file before anything runs, so a bad
+    key or value is one error, not a failed case per combination.
+    """
     keys = [k for k, _ in varies]
     if len(set(keys)) != len(keys):
-        raise ProblemError(None, "--vary", keys, "each key varied once")
+        raise ProblemError(problem, "--vary", keys, "each key varied once")
+    count = math.prod(len(values) for _, values in varies)
+    if count > max_cases:
+        raise ProblemError(
+            problem,
+            "--vary",
+            f"{count} cases",
+            f"at most {max_cases} cases; pass --max-cases {count} to run them all",
+        )
+    for key, values in varies:
+        unknown = [v for v in values if key == "solver" and v not in SOLVER_NAMES]
+        if unknown:
+            raise ProblemError(problem, "--vary solver", unknown[0], f"one of {SOLVER_NAMES}")
     text = read_problem_text(problem)
     cases = []
     for combo in itertools.product(*(values for _, values in varies)):
         chosen = dict(zip(keys, combo, strict=True))
         case_solver = chosen.pop("solver", solver)
         name = safe_name("__".join(f"{k}={v}" for k, v in zip(keys, combo, strict=True)))
+        try:
+            load_problem(problem, chosen, text=text)
+        except ProblemError as error:
+            given = ", ".join(f"{k}={v}" for k, v in chosen.items())
+            raise ProblemError(
+                problem, error.key, error.value, f"{error.expected} (set by --vary {given})"
+            ) from None
         cases.append(Case(name or "base", problem, chosen, case_solver, simulate, text))
     return cases
+
+
+def describe_grid(
+    problem: str, varies: Sequence[tuple[str, list[Any]]], *, solver: str | None, simulate: bool
+) -> dict[str, Any]:
+    """What a what-if run was asked for, recorded in its folder so --resume can check it."""
+    text = read_problem_text(problem)
+    return {
+        "kind": "whatif",
+        "problem": problem,
+        "problem_sha256": hashlib.sha256(text.encode()).hexdigest(),
+        "vary": {key: values for key, values in varies},
+        "solver": solver,
+        "static": not simulate,
+    }
 
 
 def plot_outcomes(
@@ -79,7 +129,9 @@ def plot_outcomes(
     simulate: bool,
 ) -> list[Path]:
     """One figure per outcome and varied key: the outcome against that key's values, one
-    line per combination of the other keys."""
+    line per combination of the other keys. Flagged cases (level 1 not reached, over
+    strength, a solver failure) are crossed out in red; a task held to the end of the run
+    is a lower bound, drawn as an upward triangle."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -87,34 +139,41 @@ def plot_outcomes(
 
     outcomes = OUTCOMES if simulate else {k: OUTCOMES[k] for k in STATIC_OUTCOMES}
     keys = [k for k, _ in varies]
-    ok = [r for r in rows if r["status"] == "ok"]
+    ran = [r for r in rows if r["status"] in ("ok", "flagged")]
     paths = []
     for outcome, label in outcomes.items():
         for key, values in varies:
             others = [k for k in keys if k != key]
             fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)
-            groups = sorted({tuple(str(r.get(k)) for k in others) for r in ok})
+            groups = sorted({tuple(str(r.get(k)) for k in others) for r in ran})
             for group in groups:
-                members = [r for r in ok if tuple(str(r.get(k)) for k in others) == group]
-                xs = [
-                    values.index(_value(r, key)) if not _numeric(values) else _value(r, key)
-                    for r in members
-                ]
-                ys = [np.nan if r.get(outcome) is None else r[outcome] for r in members]
-                order = np.argsort(xs)
+                members = [r for r in ran if tuple(str(r.get(k)) for k in others) == group]
+                members.sort(key=lambda r: _position(r, key, values))
+                xs = np.array([_position(r, key, values) for r in members], dtype=float)
+                ys = np.array([_number(r.get(outcome)) for r in members])
                 name = ", ".join(f"{k}={v}" for k, v in zip(others, group, strict=True))
-                ax.plot(
-                    np.asarray(xs)[order],
-                    np.asarray(ys, dtype=float)[order],
-                    "-o",
-                    label=name or None,
+                (line,) = ax.plot(xs, ys, "-o", label=name or None)
+                bound = np.array(
+                    [
+                        outcome == "task_held_s" and bool(r.get("task_held_is_lower_bound"))
+                        for r in members
+                    ]
                 )
+                if bound.any():
+                    ax.plot(xs[bound], ys[bound], "^", ms=10, mfc="none", color=line.get_color())
+                flagged = np.array([r["status"] == "flagged" for r in members])
+                if flagged.any():
+                    ax.plot(xs[flagged], ys[flagged], "x", ms=11, mew=2, color="tab:red")
+            if any(r.get("task_held_is_lower_bound") for r in ran) and outcome == "task_held_s":
+                ax.plot([], [], "^", mfc="none", color="0.3", label="held to the end (lower bound)")
+            if any(r["status"] == "flagged" for r in ran):
+                ax.plot([], [], "x", mew=2, color="tab:red", label="flagged: see whatif.csv")
             if not _numeric(values):
                 ax.set_xticks(range(len(values)), [str(v) for v in values])
             ax.set_xlabel(key)
             ax.set_ylabel(label)
             ax.grid(alpha=0.3)
-            if others:
+            if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=7)
             fig.tight_layout()
             path = out / f"whatif_{outcome}_vs_{safe_name(key)}.png"
@@ -122,6 +181,17 @@ def plot_outcomes(
             plt.close(fig)
             paths.append(path)
     return paths
+
+
+def _position(row: dict[str, Any], key: str, values: Sequence[Any]) -> float:
+    """Where a case sits on the x axis: its value, or the value's index for text values."""
+    value = _value(row, key)
+    return float(value) if _numeric(values) else float(values.index(value))
+
+
+def _number(value: Any) -> float:
+    """A plotted outcome: None (unlimited, never) is not drawn."""
+    return np.nan if value is None else float(value)
 
 
 def _value(row: dict[str, Any], key: str) -> Any:

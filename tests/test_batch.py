@@ -81,7 +81,7 @@ def test_parquet_summary_matches_the_csv(tmp_path: Path) -> None:
     assert run("batch", str(folder), "--out", str(tmp_path / "out"), "--quiet").exit_code == 0
     table = pq.read_table(tmp_path / "out" / "summary.parquet").to_pylist()
     assert [r["case"] for r in table] == [r["case"] for r in _summary(tmp_path / "out")]
-    assert table[0]["limiting_group"] == "shoulder_flexors"
+    assert table[0]["limiting_group_at_start"] == "shoulder_flexors"
 
 
 def test_a_killed_batch_resumes_without_redoing_or_losing_cases(tmp_path: Path) -> None:
@@ -148,7 +148,7 @@ def test_endurance_falls_as_the_load_grows(tmp_path: Path) -> None:
     )
     assert static.exit_code == 0, static.output
     rows = sorted(_summary(tmp_path / "s"), key=lambda r: float(r["loads[0].mass_kg"]))
-    endurance = [float(r["limiting_endurance_min"]) for r in rows]
+    endurance = [float(r["limiting_endurance_at_start_min"]) for r in rows]
     assert all(b < a for a, b in itertools.pairwise(endurance))
     simulated = run(
         "whatif",
@@ -262,11 +262,11 @@ def test_a_case_runs_from_its_text_where_the_file_does_not_exist() -> None:
     outcome = run_case(
         Case("remote", "/nowhere/holding.toml", {"loads[0].mass_kg": 5.0}, "nullspace", True, text)
     )
-    assert outcome.ok, outcome.row["error"]
+    assert outcome.row["status"] == "ok", outcome.row["error"]
     assert outcome.row["loads[0].mass_kg"] == 5.0
     assert {"timeline.csv", "summary.json", "fatigue.png"} <= set(outcome.files)
     missing = run_case(Case("gone", "/nowhere/holding.toml"))
-    assert not missing.ok and "does not exist" in missing.row["error"]
+    assert missing.row["status"] == "failed" and "does not exist" in missing.row["error"]
 
 
 def test_simulated_and_static_cases_agree_on_the_start_posture() -> None:
@@ -277,8 +277,10 @@ def test_simulated_and_static_cases_agree_on_the_start_posture() -> None:
     text = HOLD.replace("duration_s = 1800.0", "duration_s = 5.0")
     simulated = run_case(Case("s", "holding.toml", {}, "nullspace", True, text)).row
     static = run_case(Case("t", "holding.toml", {}, "nullspace", False, text)).row
-    keys = [k for k in static if k.startswith(("initial_", "limiting_endurance"))]
-    assert len(keys) == 9
+    keys = [k for k in static if k.startswith(("initial_", "limiting_endurance", "residual"))]
+    assert len(keys) == 10
     for key in keys:
         assert simulated[key] == pytest.approx(static[key], rel=1e-9), key
-    assert simulated["limiting_group"] == static["limiting_group"] == "shoulder_flexors"
+    assert simulated["limiting_group_at_start"] == static["limiting_group_at_start"]
+    assert static["limiting_group_at_start"] == "shoulder_flexors"
+    assert simulated["reached"] is static["reached"] is True

@@ -44,8 +44,12 @@ def test_fatigue_before_the_threshold_is_holding_time_over_endurance(both_solver
 
 def test_both_solvers_give_the_same_events_and_fatigue(both_solvers) -> None:
     ns, lx = both_solvers["nullspace"], both_solvers["lexicographic"]
-    ns_events = sorted((e.kind, e.half_joint, e.time_s) for e in ns.events)
-    lx_events = sorted((e.kind, e.half_joint, e.time_s) for e in lx.events)
+    ns_events = sorted(
+        (e.kind, e.half_joint, e.time_s) for e in ns.events if e.kind != "solver_fallback"
+    )
+    lx_events = sorted(
+        (e.kind, e.half_joint, e.time_s) for e in lx.events if e.kind != "solver_fallback"
+    )
     assert [e[:2] for e in ns_events] == [e[:2] for e in lx_events]
     for a, b in zip(ns_events, lx_events, strict=True):
         assert abs(a[2] - b[2]) <= 2.0, (a, b)
@@ -151,7 +155,7 @@ def test_simulate_command_writes_its_files(tmp_path: Path) -> None:
         ],
     )
     assert result.exit_code == 0, result.output
-    assert "first to fatigue: shoulder_flexors at 172 s" in result.stdout
+    assert "first at the fatigue threshold: shoulder_flexors at 172 s" in result.stdout
     names = {
         "timeline.csv",
         "events.csv",

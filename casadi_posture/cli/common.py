@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from typing import Any
 
@@ -10,11 +9,15 @@ import click
 import numpy as np
 
 from .. import __version__
-from ..endurance import endurance_model, half_joint_endurance_s
 from ..errors import CasadiPostureError, ProblemError
+from ..plain import dumps
 from ..problem import Problem, load_problem
 from ..report import table
 from ..solvers import SOLVER_NAMES
+from ..static import GroupLoad, group_loads, rule
+
+#: Exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
+INTERRUPTED = 130
 
 
 class _Commands(click.Group):
@@ -70,28 +73,12 @@ def parse_postures(items: tuple[str, ...]) -> dict[str, float]:
 
 
 def emit_json(data: Any) -> None:
-    click.echo(json.dumps(data, indent=2, allow_nan=False))
+    click.echo(dumps(data))
 
 
-def torque_breakdown(problem: Problem, q: np.ndarray) -> tuple[list[dict], list[dict]]:
-    """Per DOF the torques [N·m] and per half-joint its strength, load and endurance at ``q``."""
+def torque_breakdown(problem: Problem, q: np.ndarray) -> tuple[list[dict], list[GroupLoad]]:
+    """Per DOF the torques [N·m] and per half-joint its load and endurance at ``q``."""
     result = problem.torque_model().evaluate(q)
-    endurance = endurance_model(problem.spec.fatigue.endurance)
-    body = problem.body
-    groups = []
-    for k, half in enumerate(body.half_joints):
-        load = float(result.load_pct_mvc[k])
-        seconds = half_joint_endurance_s(endurance, load, half.region)
-        groups.append(
-            {
-                "name": half.name,
-                "dof": half.dof,
-                "strength_Nm": float(result.strength[k]),
-                "torque_Nm": float(result.half_joint_torque[k]),
-                "load_pct_mvc": load,
-                "endurance_min": seconds / 60.0,
-            }
-        )
     dofs = [
         {
             "name": d.name,
@@ -100,20 +87,28 @@ def torque_breakdown(problem: Problem, q: np.ndarray) -> tuple[list[dict], list[
             "passive_Nm": float(result.passive[i]),
             "active_Nm": float(result.active[i]),
         }
-        for i, d in enumerate(body.dofs)
+        for i, d in enumerate(problem.body.dofs)
     ]
-    return dofs, groups
+    return dofs, group_loads(problem, result)
 
 
-def json_groups(groups: list[dict]) -> list[dict]:
-    """Half-joint rows for JSON: an unlimited endurance is null."""
+def json_groups(groups: list[GroupLoad]) -> list[dict]:
+    """Half-joint rows for JSON: an endurance of null is unlimited (see the verdict)."""
     return [
-        {**g, "endurance_min": None if math.isinf(g["endurance_min"]) else g["endurance_min"]}
+        {
+            "name": g.name,
+            "dof": g.dof,
+            "strength_Nm": g.strength,
+            "torque_Nm": g.torque,
+            "load_pct_mvc": g.load_pct_mvc,
+            "endurance_min": g.endurance_min,
+            "verdict": g.verdict,
+        }
         for g in groups
     ]
 
 
-def echo_torques(dofs: list[dict], groups: list[dict]) -> None:
+def echo_torques(problem: Problem, dofs: list[dict], groups: list[GroupLoad]) -> None:
     click.echo(
         table(
             ["DOF", "angle (deg)", "external (N·m)", "passive (N·m)", "active (N·m)"],
@@ -130,11 +125,33 @@ def echo_torques(dofs: list[dict], groups: list[dict]) -> None:
                 "torque (N·m)",
                 "load (%MVC)",
                 "endurance (min)",
+                "verdict",
             ],
-            [list(g.values()) for g in groups],
+            [
+                [
+                    g.name,
+                    g.dof,
+                    g.strength,
+                    g.torque,
+                    g.load_pct_mvc,
+                    g.endurance_min,
+                    g.verdict.upper() if g.over_strength else g.verdict,
+                ]
+                for g in groups
+            ],
             digits=2,
         )
     )
+    click.echo(f"\nendurance rule: {rule(problem)}")
+
+
+def over_strength_message(groups: list[GroupLoad]) -> str | None:
+    """One line naming every group over strength, or None."""
+    over = [g for g in groups if g.over_strength]
+    if not over:
+        return None
+    needs = ", ".join(f"{g.name} needs {g.load_pct_mvc:.2f} %MVC" for g in over)
+    return f"over strength: {needs}; this posture cannot be held"
 
 
 BATCH_OPTIONS = [

@@ -8,14 +8,17 @@ from pathlib import Path
 import click
 
 from ..compare import compare, rows
+from ..ik import ACHIEVED_TOLERANCE, IKResult
 from ..report import table
 from ..solvers import make_solver
+from ..static import GroupLoad, rule
 from .common import (
     SOLVER_OPTION,
     echo_torques,
     emit_json,
     json_groups,
     main,
+    over_strength_message,
     problem_from,
     torque_breakdown,
 )
@@ -27,9 +30,13 @@ from .common import (
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 def solve(problem: str, solver: str | None, as_json: bool) -> None:
     """Solve the prioritized IK of a problem from its posture_deg; print the posture,
-    the residual of each priority level, the active constraints and the torques there.
+    the residual of each priority level and whether it was achieved, the active
+    constraints and the torques there.
 
-    Exits with code 1 when the solver fails (its status is printed).
+    Exits with code 1, saying why, when the answer cannot be used as it is: the solver
+    failed (its status is printed), level 1 was not achieved (residual above
+    0.0001 m or rad: out of reach, or blocked by a joint limit) or a muscle group would
+    need more than its strength.
 
     \b
     Example:
@@ -42,11 +49,18 @@ def solve(problem: str, solver: str | None, as_json: bool) -> None:
     result = make_solver(name, hierarchy, resolved.spec.solver).solve(resolved.posture)
     dofs, groups = torque_breakdown(resolved, result.q)
     levels = [
-        {"level": k + 1, "tasks": tasks, "residual": float(result.residuals[k]), "unit": unit}
+        {
+            "level": k + 1,
+            "tasks": tasks,
+            "residual": float(result.residuals[k]),
+            "unit": unit,
+            "achieved": result.achieved[k],
+        }
         for k, (tasks, unit) in enumerate(
             zip(hierarchy.level_names(), hierarchy.level_units(), strict=True)
         )
     ]
+    flags = solve_flags(result, levels, groups)
     if as_json:
         emit_json(
             {
@@ -54,12 +68,16 @@ def solve(problem: str, solver: str | None, as_json: bool) -> None:
                 "solver": name,
                 "status": result.status,
                 "success": result.success,
+                "reached": result.achieved[0],
+                "flags": flags,
                 "iterations": result.iterations,
                 "wall_time_s": result.wall_time_s,
                 "posture_deg": {d["name"]: d["angle_deg"] for d in dofs},
+                "achieved_tolerance": ACHIEVED_TOLERANCE,
                 "levels": levels,
                 "at_limits": list(result.at_limits),
                 "inequality_active": result.inequality_active,
+                "endurance_rule": rule(resolved),
                 "torques": {"dofs": dofs, "half_joints": json_groups(groups)},
             }
         )
@@ -70,15 +88,40 @@ def solve(problem: str, solver: str | None, as_json: bool) -> None:
         )
         click.echo(
             table(
-                ["level", "tasks", "residual", "unit"],
-                [[lv["level"], lv["tasks"], f"{lv['residual']:.3g}", lv["unit"]] for lv in levels],
+                ["level", "tasks", "residual", "unit", f"achieved (≤ {ACHIEVED_TOLERANCE:g})"],
+                [
+                    [
+                        lv["level"],
+                        lv["tasks"],
+                        f"{lv['residual']:.3g}",
+                        lv["unit"],
+                        "yes" if lv["achieved"] else "NO",
+                    ]
+                    for lv in levels
+                ],
             )
         )
         limits = ", ".join(result.at_limits) or "none"
         click.echo(f"\njoints at a limit: {limits}\n")
-        echo_torques(dofs, groups)
-    if not result.success:
+        echo_torques(resolved, dofs, groups)
+        for flag in flags:
+            click.echo(f"FLAGGED: {flag}")
+    if flags:
         raise SystemExit(1)
+
+
+def solve_flags(result: IKResult, levels: list[dict], groups: list[GroupLoad]) -> list[str]:
+    """Why a solve's answer cannot be used as it is, one line each (empty: it can)."""
+    flags = [] if result.success else [f"the {result.solver} solver failed: {result.status}"]
+    top = levels[0]
+    if not top["achieved"]:
+        flags.append(
+            f"level 1 ({top['tasks']}) not achieved: residual {top['residual']:.3g} "
+            f"{top['unit']} > {ACHIEVED_TOLERANCE:g} {top['unit']}; the task is out of the "
+            "body's reach or blocked by a joint limit (positions are in metres)"
+        )
+    over = over_strength_message(groups)
+    return flags + ([over] if over else [])
 
 
 @main.command(name="compare")

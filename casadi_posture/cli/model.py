@@ -13,7 +13,16 @@ from ..describe import description
 from ..errors import ProblemError
 from ..problem import load_problem
 from ..report import table
-from .common import echo_torques, emit_json, json_groups, main, problem_from, torque_breakdown
+from ..static import rule
+from .common import (
+    echo_torques,
+    emit_json,
+    json_groups,
+    main,
+    over_strength_message,
+    problem_from,
+    torque_breakdown,
+)
 
 
 @main.command()
@@ -130,7 +139,10 @@ def describe(problem: str, as_json: bool) -> None:
 )
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
-    """Per DOF the external, passive and active torque; per half-joint its load and endurance.
+    """Per DOF the external, passive and active torque; per half-joint its load, endurance
+    and a verdict: carries nothing, unlimited (the fatigue model accumulates nothing at
+    this load), limited, or over strength (above 100 %MVC: endurance 0, the posture cannot
+    be held; the command then exits with code 1).
 
     \b
     Example:
@@ -140,19 +152,27 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
     """
     resolved = problem_from(problem, postures)
     dofs, groups = torque_breakdown(resolved, resolved.posture)
-    model_name = resolved.spec.fatigue.endurance
+    over = over_strength_message(groups)
     if as_json:
         emit_json(
             {
                 "problem": problem,
-                "endurance_model": model_name,
+                "endurance_model": resolved.spec.fatigue.endurance,
+                "fatigue_model": resolved.fatigue.name,
+                "endurance_rule": rule(resolved),
+                "feasible": over is None,
+                "flags": [over] if over else [],
                 "dofs": dofs,
                 "half_joints": json_groups(groups),
             }
         )
-        return
-    click.echo(f"{problem} ({resolved.body.name}); endurance model: {model_name}\n")
-    echo_torques(dofs, groups)
+    else:
+        click.echo(f"{problem} ({resolved.body.name})\n")
+        echo_torques(resolved, dofs, groups)
+        if over:
+            click.echo(f"FLAGGED: {over}")
+    if over:
+        raise SystemExit(1)
 
 
 @main.command()

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import math
 import shutil
 from pathlib import Path
 from typing import Any
 
 import click
 
+from .. import interrupt
 from ..report import table
-from .common import SOLVER_OPTION, batch_options, main, problem_from
+from ..whatif import MAX_CASES
+from .common import INTERRUPTED, SOLVER_OPTION, batch_options, main, problem_from
 
 
 @main.command()
@@ -47,6 +50,12 @@ def simulate(
     its hysteresis, recovery. Writes timeline.csv, events.csv, summary.json,
     manifest.json and figures into the output folder.
 
+    The run ends at its duration, when a muscle group is exhausted (fatigue 1, or a load
+    above its strength), or at once when level 1 cannot be achieved at the start. Exit
+    code 1 when the answer cannot be used as it is (the task was never held, the start
+    is over strength, or no solver converged on some step), 130 on Ctrl-C: the files
+    then hold the steps run so far, marked as interrupted.
+
     \b
     Example:
       casadi-posture simulate problems/holding_m45.toml --strategy passive
@@ -54,7 +63,7 @@ def simulate(
           --duration 600 --out out/hysteresis
     """
     from ..plots import plot_simulation
-    from ..results import summary, write_results
+    from ..results import SHOWN_RECOVERIES, summary, write_results
     from ..simulation import simulate as run
 
     given = (
@@ -63,26 +72,29 @@ def simulate(
         ("simulation.duration_s", duration),
     )
     overrides = {key: value for key, value in given if value is not None}
-    resolved = problem_from(problem, overrides=overrides)
-    result = run(resolved, solver)
-    out = out or Path(
-        "out", "simulate", f"{Path(problem).stem}-{result.settings.strategy}-{result.solver}"
-    )
-    files = write_results(result, out) + plot_simulation(result, out)
+    with interrupt.deferred():
+        resolved = problem_from(problem, overrides=overrides)
+        result = run(resolved, solver)
+        out = out or Path(
+            "out", "simulate", f"{Path(problem).stem}-{result.settings.strategy}-{result.solver}"
+        )
+        files = write_results(result, out) + plot_simulation(result, out)
     report = summary(result)
     stats = report["solver_statistics"]
     click.echo(
-        f"{problem}: {report['simulated_s']:.0f} s simulated, {result.solver} solver, "
-        f"{report['strategy']} strategy; {stats['wall_time_s']:.2f} s wall, "
-        f"{100 * (1 - stats['share_outside_ik']):.0f} % in IK, "
-        f"{stats['ik_failures']} IK failures\n"
+        f"{problem}: {report['simulated_s']:g} of {report['duration_s']:g} s simulated, "
+        f"{result.solver} solver, {report['strategy']} strategy; {stats['wall_time_s']:.2f} s "
+        f"wall, {100 * (1 - stats['share_outside_ik']):.0f} % in IK, "
+        f"{stats['ik_fallbacks']} steps by the other solver, {stats['ik_failures']} IK failures"
     )
+    click.echo(f"endurance rule: {report['endurance_rule']}\n")
     click.echo(
         table(
             [
                 "half-joint",
                 "initial load (%MVC)",
                 "initial endurance (min)",
+                "at start",
                 "first at fatigue threshold (s)",
                 "max fatigue",
             ],
@@ -90,7 +102,8 @@ def simulate(
                 [
                     g["half_joint"],
                     g["initial_load_pct_mvc"],
-                    g["initial_endurance_min"],
+                    _minutes(g["initial_endurance_min"], g["initial_verdict"]),
+                    g["initial_verdict"],
                     g["first_fatigue_threshold_s"],
                     g["max_fatigue"],
                 ]
@@ -99,23 +112,57 @@ def simulate(
             digits=2,
         )
     )
-    first = report["first_to_fatigue"]
-    click.echo(
-        f"\nfirst to fatigue: {first['half_joint']} at {first['time_s']:.0f} s"
-        if first
-        else "\nfirst to fatigue: none"
-    )
-    click.echo(f"fatigue/recovery cycles: {report['fatigue_recovery_cycles']}")
-    for rec in report["recovery_postures"]:
+    click.echo()
+    for line in outcome_lines(report):
+        click.echo(line)
+    recoveries = report["recovery_postures"]
+    for rec in recoveries[:SHOWN_RECOVERIES]:
         posture = ", ".join(f"{k} {v:.1f}°" for k, v in rec["posture_deg"].items())
-        click.echo(f"  recovered at {rec['time_s']:.0f} s: {posture}")
-    lost = report["task_lost"]
-    click.echo(
-        f"task could no longer be held at {lost['time_s']:.0f} s ({lost['half_joint']} exhausted)"
-        if lost
-        else "task held to the end"
-    )
+        click.echo(f"  recovered at {rec['time_s']:g} s: {posture}")
+    if len(recoveries) > SHOWN_RECOVERIES:
+        click.echo(f"  ... and {len(recoveries) - SHOWN_RECOVERIES} more in summary.json")
+    for flag in report["flags"]:
+        click.echo(f"FLAGGED: {flag}")
     click.echo("files: " + ", ".join(str(f) for f in files))
+    if result.stop == "interrupted" or interrupt.requested():
+        raise SystemExit(INTERRUPTED)
+    if report["flags"]:
+        raise SystemExit(1)
+
+
+def _minutes(value: float | None, verdict: str | None) -> float | None:
+    """An endurance for the table: unlimited shows as inf."""
+    return math.inf if value is None and verdict is not None else value
+
+
+def outcome_lines(report: dict[str, Any]) -> list[str]:
+    """The outcome of a simulation in words: limiting group, first to tire, cycles, task."""
+    limiting, first = report["limiting_group_at_start"], report["first_to_fatigue"]
+    exhausted, task = report["exhausted_group"], report["task"]
+    lines = [
+        "limiting group at start (shortest endurance): "
+        + (
+            f"{limiting['half_joint']} ({limiting['endurance_min']:.2f} min)"
+            if limiting
+            else "none (no group tires)"
+        ),
+        "first at the fatigue threshold: "
+        + (f"{first['half_joint']} at {first['time_s']:g} s" if first else "none"),
+        "exhausted: "
+        + (
+            f"{exhausted['half_joint']} at {exhausted['time_s']:g} s ({exhausted['cause']})"
+            if exhausted
+            else "none"
+        ),
+    ]
+    if not task["held_at_start"]:
+        lines.append(f"task never held: {task['lost']['reason'] if task['lost'] else 'no step'}")
+    elif task["lost"]:
+        lines.append(f"task held {task['held_s']:g} s, then lost: {task['lost']['reason']}")
+    else:
+        lines.append(f"task held ≥ {task['held_s']:g} s (to the end of the run)")
+    lines.append(f"fatigue/recovery cycles: {report['fatigue_recovery_cycles']}")
+    return lines
 
 
 @main.command()
@@ -124,7 +171,7 @@ def simulate(
     "--out",
     type=click.Path(file_okay=False, path_type=Path),
     required=True,
-    help="Output folder: cases/<case>/ and summary.csv.",
+    help="Output folder: cases/<case>/, summary.csv and run.json.",
 )
 @SOLVER_OPTION
 @batch_options
@@ -141,9 +188,12 @@ def batch(
     folder as simulate writes it, and one summary row per case in summary.csv (and
     summary.parquet when pyarrow is installed).
 
-    A failing case is recorded with its reason and the batch carries on. Exit code 0
-    when every case succeeded, 1 when some failed, 2 for usage errors. A killed batch
-    rerun with --resume redoes no finished case.
+    A case's status is ok; flagged when its answer cannot be used as it is (level 1 not
+    reached, a group over strength at the start, a solver failure: see its flags);
+    failed, with a one-line reason, when it could not run; skipped when the problem has
+    no tasks. The batch always carries on. Exit code 0 when every case is ok or skipped,
+    1 when some are flagged or failed, 2 for usage errors, 130 on Ctrl-C (finished cases
+    are kept; rerun with --resume).
 
     \b
     Example:
@@ -152,21 +202,44 @@ def batch(
     """
     from ..batch import cases_from_paths, run_batch
 
+    cases = cases_from_paths(problems, solver)
+    described = {"kind": "batch", "problems": list(problems), "solver": solver}
     report = run_batch(
-        cases_from_paths(problems, solver),
+        cases,
         out,
         jobs=jobs,
         scheduler=scheduler,
         resume=resume,
         quiet=quiet,
+        describe=described,
+    )
+    counts = ", ".join(
+        f"{len(report.with_status(status))} {status}"
+        for status in ("ok", "flagged", "failed", "skipped")
     )
     click.echo(
-        f"{len(report.rows)} cases ({report.ran} run now, {report.skipped} already "
-        f"done), {len(report.failed)} failed; summary: {report.summary}"
+        f"{len(report.rows)} cases ({report.ran} run now, {report.skipped} already done): "
+        f"{counts}; summary: {report.summary}"
     )
-    for row in report.failed:
+    for row in report.with_status("flagged"):
+        click.echo(f"flagged {row['case']}: {row['flags']}")
+    for row in report.with_status("failed"):
         click.echo(f"failed {row['case']}: {row['error']}")
-    if report.failed:
+    for row in report.with_status("skipped"):
+        click.echo(f"skipped {row['case']}: {row['error']}")
+    _finish(report, len(cases))
+
+
+def _finish(report: Any, total: int) -> None:
+    """Exit 130 after Ctrl-C, 1 when a case is flagged or failed."""
+    if report.interrupted:
+        click.echo(
+            f"interrupted: {len(report.rows)} of {total} cases finished and kept; "
+            "rerun with --resume to run the rest",
+            err=True,
+        )
+        raise SystemExit(INTERRUPTED)
+    if report.with_status("flagged", "failed"):
         raise SystemExit(1)
 
 
@@ -190,6 +263,13 @@ def batch(
 @click.option(
     "--static", is_flag=True, help="Answer from torques at the start posture only (no time loop)."
 )
+@click.option(
+    "--max-cases",
+    type=click.IntRange(min=1),
+    default=MAX_CASES,
+    show_default=True,
+    help="Refuse a larger grid (a guard against a typo that would start a huge run).",
+)
 @SOLVER_OPTION
 @batch_options
 def whatif(
@@ -197,6 +277,7 @@ def whatif(
     varies: tuple[str, ...],
     out: Path | None,
     static: bool,
+    max_cases: int,
     solver: str | None,
     jobs: int,
     scheduler: str | None,
@@ -204,10 +285,14 @@ def whatif(
     quiet: bool,
 ) -> None:
     """What if the load, the line, the strategy, R_min, the thresholds, the body or the
-    solver were different? Runs the grid of the varied keys and reports per case the
-    endurance of each half-joint and of the task, the limiting muscle group, the
-    fatigue/recovery cycles and the recovery posture: a table, whatif.csv and a plot
-    of each outcome against each varied key.
+    solver were different? Runs the grid of the varied keys and reports per case whether
+    level 1 was reached, the limiting muscle group at the start (the shortest endurance)
+    and, simulated, the group actually exhausted, the fatigue/recovery cycles and how
+    long the task was held (≥: held to the end of the run): a table, whatif.csv and a
+    plot of each outcome against each varied key.
+
+    Every combination is validated before anything runs. Exit codes as for batch: 1
+    when a case is flagged (not reached, over strength, solver failure) or failed.
 
     \b
     Example:
@@ -217,18 +302,27 @@ def whatif(
       casadi-posture whatif problems/holding_m45.toml --vary body.mass_kg=60,73,90 --static
     """
     from ..batch import run_batch
-    from ..whatif import grid, parse_vary, plot_outcomes
+    from ..whatif import describe_grid, grid, parse_vary, plot_outcomes
 
-    parsed = [parse_vary(text) for text in varies]
+    parsed = [parse_vary(text, problem) for text in varies]
     out = out or Path("out", "whatif", Path(problem).stem)
-    cases = grid(problem, parsed, solver=solver, simulate=not static)
-    report = run_batch(cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet)
+    cases = grid(problem, parsed, solver=solver, simulate=not static, max_cases=max_cases)
+    described = describe_grid(problem, parsed, solver=solver, simulate=not static)
+    report = run_batch(
+        cases,
+        out,
+        jobs=jobs,
+        scheduler=scheduler,
+        resume=resume,
+        quiet=quiet,
+        describe=described,
+    )
     shutil.copyfile(report.summary, out / "whatif.csv")
     keys = [k for k, _ in parsed]
-    headers = [*keys, "limiting group", "endurance at start (min)"]
+    headers = [*keys, "reached", "limiting group at start", "endurance at start (min)"]
     if not static:
-        headers += ["first at threshold (s)", "cycles", "task held (s)"]
-    rows = []
+        headers += ["first at threshold (s)", "exhausted group", "cycles", "task held (s)"]
+    headers.append("flags")
     order = {k: [str(v) for v in values] for k, values in parsed}
 
     def position(row: dict[str, Any]) -> list[int]:
@@ -237,21 +331,43 @@ def whatif(
             order[k].index(v) if v in order[k] else -1 for k, v in zip(keys, given, strict=True)
         ]
 
+    rows = []
     for row in sorted(report.rows, key=position):
-        if row["status"] != "ok":
-            failed = [*(row.get(k) for k in keys), f"failed: {row['error']}"]
-            rows.append(failed + [None] * (len(headers) - len(failed)))
+        line = [row.get("solver") if k == "solver" else row.get(k) for k in keys]
+        if row["status"] == "failed":
+            rows.append(
+                line + [None] * (len(headers) - len(line) - 1) + [f"failed: {row['error']}"]
+            )
             continue
-        line = [
-            *(row.get("solver") if k == "solver" else row.get(k) for k in keys),
-            row["limiting_group"],
-            row["limiting_endurance_min"],
+        line += [
+            _yes_no(row.get("reached")),
+            row["limiting_group_at_start"] or "none",
+            _unlimited(row["limiting_endurance_at_start_min"]),
         ]
         if not static:
-            line += [row["first_fatigue_s"], row["fatigue_recovery_cycles"], row["task_held_s"]]
-        rows.append(line)
-    click.echo(table(headers, rows, digits=2))
+            line += [
+                row["first_fatigue_s"],
+                row["exhausted_group"] or "none",
+                row["fatigue_recovery_cycles"],
+                _held(row),
+            ]
+        rows.append([*line, row["flags"] or "-"])
+    right = {headers.index(h) for h in ("task held (s)",) if h in headers}
+    click.echo(table(headers, rows, digits=2, right=right))
     figures = plot_outcomes(report.rows, parsed, out, simulate=not static)
     click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(figures)} in {out}")
-    if report.failed:
-        raise SystemExit(1)
+    _finish(report, len(cases))
+
+
+def _yes_no(value: Any) -> str:
+    return "-" if value is None else ("yes" if value else "NO")
+
+
+def _unlimited(minutes: float | None) -> float:
+    """The limiting endurance: none when no group tires."""
+    return math.inf if minutes is None else minutes
+
+
+def _held(row: dict[str, Any]) -> str:
+    """How long the task was held; '≥' when the run ended with it still held."""
+    return f"{'≥ ' if row['task_held_is_lower_bound'] else ''}{row['task_held_s']:.2f}"
