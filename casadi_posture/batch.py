@@ -47,7 +47,25 @@ from .static import STRENGTH_PCT_MVC, group_loads, rule
 CASES = "cases"
 ROW = "row.json"
 RUN = "run.json"
-LEADING = ("case", "status", "flags", "error", "problem", "solver", "strategy", "r_min")
+LEADING = (
+    "case",
+    "status",
+    "flags",
+    "error",
+    "problem",
+    "solver",
+    "strategy",
+    "r_min",
+    "reached",
+    "limiting_group_at_start",
+    "limiting_endurance_at_start_min",
+    "over_strength_at_start",
+    "first_to_fatigue",
+    "exhausted_group",
+    "task_held_s",
+    "task_held_is_lower_bound",
+    "task_lost_reason",
+)
 
 #: A case's status: it ran and its answer stands (``ok``), it ran but its answer cannot be
 #: used as it is (``flagged``: see its ``flags``), it could not run (``failed``: see its
@@ -90,8 +108,9 @@ class Outcome:
 
 @dataclass(frozen=True)
 class BatchReport:
-    """The rows of every case in the output folder, sorted by case, what ran now, and whether
-    Ctrl-C stopped the run (the finished cases are kept)."""
+    """The rows of every case in the output folder, sorted by case; how many cases ran now
+    and how many were already done; whether Ctrl-C stopped the run (the finished cases are
+    kept)."""
 
     rows: list[dict[str, Any]]
     ran: int
@@ -310,7 +329,7 @@ def run_batch(
             out, "--out", MISSING, "a folder without earlier results, or --resume to continue them"
         )
     if resume and finished:
-        _same_run(out, record)
+        _same_run(out, record, finished)
     folder.mkdir(parents=True, exist_ok=True)
     (out / RUN).write_text(dumps(record) + "\n")
     for stale in folder.glob(".tmp-*"):
@@ -319,18 +338,19 @@ def run_batch(
     bar = tqdm(
         total=len(todo), unit="case", file=sys.stderr, disable=quiet or not sys.stderr.isatty()
     )
-    interrupted = False
+    interrupted, ran = False, 0
     with interrupt.deferred():
         try:
             for outcome in _outcomes(todo, jobs, scheduler):
                 _store(outcome, folder)
+                ran += 1
                 bar.update(1)
         except KeyboardInterrupt:
             interrupted = True
     bar.close()
     rows = sorted((_row(p) for p in folder.iterdir() if _is_case(p)), key=lambda r: r["case"])
     summary = write_summary(rows, out)
-    return BatchReport(rows, len(todo), len(cases) - len(todo), summary, interrupted)
+    return BatchReport(rows, ran, len(cases) - len(todo), summary, interrupted)
 
 
 def _is_case(path: Path) -> bool:
@@ -348,21 +368,39 @@ def _finished(folder: Path) -> dict[str, str]:
     return {p.name: _row(p)["status"] for p in folder.iterdir() if _is_case(p)}
 
 
-def _same_run(out: Path, record: dict[str, Any]) -> None:
-    """Refuse to resume a folder that holds another run."""
+def _same_run(out: Path, record: dict[str, Any], finished: dict[str, str]) -> None:
+    """Refuse to resume a folder that holds another run: another tool version, other
+    settings, other cases, or a finished case whose inputs changed (a failed case may
+    change: it runs again)."""
     try:
         earlier = json.loads((out / RUN).read_text())
     except (OSError, ValueError):
         earlier = None
-    if earlier == json.loads(dumps(record)):
-        return
-    what = "no record of its run (run.json)" if earlier is None else "a different run"
+    if earlier is None:
+        what = "no record of its run (run.json)"
+    else:
+        now = json.loads(dumps(record))
+        settings = {k: v for k, v in now.items() if k != "cases"}
+        same = settings == {k: v for k, v in earlier.items() if k != "cases"}
+        same = same and set(earlier["cases"]) == set(now["cases"])
+        changed = [
+            name
+            for name, status in finished.items()
+            if status != "failed" and earlier["cases"].get(name) != now["cases"].get(name)
+        ]
+        if same and not changed:
+            return
+        what = (
+            f"a run whose finished case {changed[0]} had other inputs"
+            if same
+            else "a different run (other problem files, varied keys or values, solver, "
+            "static or simulated cases, or tool version)"
+        )
     raise ProblemError(
         out,
         "--resume",
         MISSING,
-        f"the same run as before, but the folder holds {what}: other problem files or "
-        "texts, varied keys or values, solver or tool version; use a new --out",
+        f"the same run as before, but the folder holds {what}; use a new --out",
     )
 
 

@@ -84,6 +84,8 @@ def rows(comparison: Comparison) -> list[dict[str, object]]:
                 "unit": comparison.units[k],
                 "residual_nullspace": float(comparison.nullspace.residuals[k]),
                 "residual_lexicographic": float(comparison.lexicographic.residuals[k]),
+                "achieved_nullspace": comparison.nullspace.achieved[k],
+                "achieved_lexicographic": comparison.lexicographic.achieved[k],
                 "max_joint_difference_deg": comparison.max_joint_difference_deg,
                 "time_nullspace_ms": 1e3 * comparison.nullspace.wall_time_s,
                 "time_lexicographic_ms": 1e3 * comparison.lexicographic.wall_time_s,

@@ -24,12 +24,12 @@ class ProblemError(CasadiPostureError):
         super().__init__(self._message())
 
     def _message(self) -> str:
-        where = self.file or "<input>"
+        where = f"{self.file}: " if self.file else ""
         if self.key is None:
-            return f"{where}: {self.expected}"
+            return f"{where}{self.expected}"
         if self.value is MISSING:
-            return f"{where}: {self.key}: expected {self.expected}"
-        return f"{where}: {self.key} = {_show(self.value)}: expected {self.expected}"
+            return f"{where}{self.key}: expected {self.expected}"
+        return f"{where}{self.key} = {_show(self.value)}: expected {self.expected}"
 
 
 def _show(value: Any) -> str:

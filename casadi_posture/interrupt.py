@@ -14,6 +14,9 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+#: Exit code of a command stopped by Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_CODE = 130
+
 _requested = threading.Event()
 _depth = 0
 
@@ -28,8 +31,9 @@ def _handler(signum: int, frame: object) -> None:
 def deferred() -> Iterator[None]:
     """Turn Ctrl-C into a request while the block runs (main thread only; nests)."""
     global _depth
-    if threading.current_thread() is not threading.main_thread():
-        yield
+    ignored = signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    if threading.current_thread() is not threading.main_thread() or ignored:
+        yield  # a worker thread, or a process told to ignore Ctrl-C (a background job)
         return
     if _depth == 0:
         _requested.clear()

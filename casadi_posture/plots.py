@@ -16,6 +16,13 @@ from .simulation import SimulationResult
 from .tasks import Line
 
 
+def figure_formats() -> list[str]:
+    """The file endings a figure can be saved with (without the dot)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    return sorted(FigureCanvasAgg.get_supported_filetypes())
+
+
 def plot_torque_curve(curve: TorqueCurve, path: Path, title: str) -> Path:
     """The paper's Fig. 3: passive, external, active and minus-active torque over the range."""
     deg = np.degrees(curve.angles)
@@ -51,8 +58,17 @@ def _save(fig: plt.Figure, path: Path) -> Path:
     return path
 
 
+#: Recovery postures drawn in postures.png (summary.json lists them all).
+DRAWN_RECOVERIES = 5
+
+
 def _title(result: SimulationResult) -> str:
-    return f"{result.problem.path.stem}: {result.settings.strategy} strategy, {result.solver}"
+    text = f"{result.problem.path.stem}: {result.settings.strategy} strategy, {result.solver}"
+    if result.stop == "interrupted":
+        text += " (interrupted: partial run)"
+    elif result.stop == "never_held":
+        text += " (task never held)"
+    return text
 
 
 def plot_fatigue(result: SimulationResult, path: Path) -> Path:
@@ -120,7 +136,11 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
     recoveries = [
         int(np.argmax(tl.time >= e.time_s)) for e in result.events if e.kind == "constraint_off"
     ]
-    shown = [(0, "initial")] + [(k, f"recovery at {tl.time[k]:.0f} s") for k in recoveries]
+    shown = [(0, "initial")] + [
+        (k, f"recovery at {tl.time[k]:.0f} s") for k in recoveries[:DRAWN_RECOVERIES]
+    ]
+    if len(recoveries) > DRAWN_RECOVERIES:
+        shown[-1] = (shown[-1][0], f"{shown[-1][1]} (+{len(recoveries) - DRAWN_RECOVERIES} more)")
     shown.append((tl.time.size - 1, f"end ({tl.time[-1]:.0f} s)"))
     fig, ax = plt.subplots(figsize=(5.0, 5.0), dpi=120)
     for j, (step, label) in enumerate(shown):
@@ -141,7 +161,10 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
 
 
 def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
-    """All figures of a simulation into ``out``."""
+    """All figures of a simulation into ``out`` (none for a run stopped before its first
+    step)."""
+    if result.timeline.time.size == 0:
+        return []
     return [
         plot_fatigue(result, out / "fatigue.png"),
         plot_effector(result, out / "effector.png"),

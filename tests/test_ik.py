@@ -79,10 +79,17 @@ def test_joint_limits_are_never_exceeded(solver, tmp_path) -> None:
     path.write_text(text)
     body = load_problem(path).body
     reach = Position("close", 1, "wrist", (0.15, 0.0, -0.15))
+    hierarchy = TaskHierarchy(body, [reach])
     for start in (START, np.radians([-50.0, 59.0]), np.radians([170.0, 0.0])):
-        result = solver(TaskHierarchy(body, [reach])).solve(start)
+        result = solver(hierarchy).solve(start)
         assert np.all(result.q >= body.lower - 1e-9) and np.all(result.q <= body.upper + 1e-9)
-        assert "elbow_flexion" in result.at_limits
+        if result.status == "stalled":
+            # From (-50°, 59°) the clamping loop comes to rest at both limits, (-60°, 60°),
+            # farther from the target than where it started: that is no answer, and the
+            # solver must say so and return the best posture it passed.
+            assert result.residuals[0] <= hierarchy.residual_norms(start)[0]
+            continue
+        assert result.success and "elbow_flexion" in result.at_limits
 
 
 @pytest.mark.parametrize("solver", SOLVERS, ids=lambda s: s.name)

@@ -1,7 +1,5 @@
 """``python -m casadi_posture.cli``."""
 
-import sys
+from ..console import main
 
-from . import main
-
-sys.exit(main())
+main()

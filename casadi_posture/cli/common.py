@@ -8,7 +8,7 @@ from typing import Any
 import click
 import numpy as np
 
-from .. import __version__
+from .. import __version__, interrupt
 from ..errors import CasadiPostureError, ProblemError
 from ..plain import dumps
 from ..problem import Problem, load_problem
@@ -16,19 +16,25 @@ from ..report import table
 from ..solvers import SOLVER_NAMES
 from ..static import GroupLoad, group_loads, rule
 
-#: Exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
-INTERRUPTED = 130
+INTERRUPTED = interrupt.EXIT_CODE
 
 
 class _Commands(click.Group):
-    """A group that turns every library error into one line on stderr and exit code 2."""
+    """A group that turns every input error into one line on stderr and exit code 2, and
+    Ctrl-C into one line and exit code 130 (click alone says "Aborted!" and exits 1)."""
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
             return super().invoke(ctx)
-        except CasadiPostureError as error:
+        except ProblemError as error:
             click.echo(f"error: {error}", err=True)
             ctx.exit(2)
+        except CasadiPostureError as error:
+            click.echo(f"failed: {error}", err=True)
+            ctx.exit(1)
+        except KeyboardInterrupt:
+            click.echo("interrupted", err=True)
+            ctx.exit(INTERRUPTED)
 
 
 @click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
@@ -54,11 +60,12 @@ def problem_from(
 ) -> Problem:
     problem = load_problem(path, overrides)
     if postures:
-        problem = problem.with_posture(parse_postures(postures))
+        problem = problem.with_posture(parse_postures(postures, path))
     return problem
 
 
-def parse_postures(items: tuple[str, ...]) -> dict[str, float]:
+def parse_postures(items: tuple[str, ...], path: str | None = None) -> dict[str, float]:
+    """``NAME=DEG`` options as {name: degrees}; ``path`` names the problem in errors."""
     out = {}
     for item in items:
         name, sep, value = item.partition("=")
@@ -67,7 +74,7 @@ def parse_postures(items: tuple[str, ...]) -> dict[str, float]:
         except ValueError:
             angle = math.nan
         if not name or not math.isfinite(angle):
-            raise ProblemError(None, "--posture", item, "NAME=DEG with DEG a number of degrees")
+            raise ProblemError(path, "--posture", item, "NAME=DEG with DEG a number of degrees")
         out[name] = angle
     return out
 

@@ -137,21 +137,28 @@ def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
     residual per level, largest joint difference, wall time, status, and a verdict
     that says why they disagree (an unreachable target, two posture families).
 
-    Problems without tasks are skipped. Exits with code 1 when any problem disagrees.
+    Problems without tasks are skipped. Exits with code 1 when any problem disagrees, a
+    solver fails, or level 1 is not achieved (residual above 0.0001 m or rad).
 
     \b
     Example:
       casadi-posture compare problems/*.toml --out out/compare
     """
     table_rows: list[dict[str, object]] = []
-    disagreements = 0
+    flagged = []
     for path in problems:
         resolved = problem_from(path)
         if not resolved.tasks:
             click.echo(f"skipped {path}: no tasks")
             continue
         comparison = compare(resolved)
-        disagreements += not comparison.agree
+        if not comparison.agree:
+            flagged.append(f"{path}: the solvers disagree: {comparison.verdict}")
+        unreached = [
+            r.solver for r in (comparison.nullspace, comparison.lexicographic) if not r.achieved[0]
+        ]
+        if unreached:
+            flagged.append(f"{path}: level 1 not achieved by {' and '.join(unreached)}")
         table_rows += rows(comparison)
     headers = [
         "problem",
@@ -193,5 +200,7 @@ def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
             writer.writeheader()
             writer.writerows(table_rows)
         click.echo(f"\nwritten: {out / 'compare.csv'}")
-    if disagreements:
+    for line in flagged:
+        click.echo(f"FLAGGED: {line}")
+    if flagged:
         raise SystemExit(1)

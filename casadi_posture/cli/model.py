@@ -189,7 +189,7 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
     "--out",
     type=click.Path(dir_okay=False, path_type=Path),
     default=None,
-    help="PNG file to write [default: <problem>-<dof>.png].",
+    help="Figure to write: .png, .pdf, .svg, ... [default: <problem>-<dof>.png].",
 )
 def curve(problem: str, dof: str, postures: tuple[str, ...], out: Path | None) -> None:
     """Plot τp, τe, τa and -τa over one DOF's range (the paper's Fig. 3) and print the
@@ -199,13 +199,17 @@ def curve(problem: str, dof: str, postures: tuple[str, ...], out: Path | None) -
     Example:
       casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion --out fig3.png
     """
-    from ..plots import plot_torque_curve
+    from ..plots import figure_formats, plot_torque_curve
 
+    out = out or Path(f"{Path(problem).stem}-{dof}.png")
+    formats = figure_formats()
+    if out.suffix.lstrip(".").lower() not in formats:
+        expected = f"a figure file ending in one of {', '.join('.' + f for f in sorted(formats))}"
+        raise ProblemError(problem, "--out", str(out), expected)
     resolved = problem_from(problem, postures)
     if dof not in resolved.body.index:
-        raise ProblemError(None, "--dof", dof, f"one of {resolved.body.dof_names}")
+        raise ProblemError(problem, "--dof", dof, f"one of {resolved.body.dof_names}")
     result = torque_curve(resolved.torque_model(), resolved.posture, dof)
-    out = out or Path(f"{Path(problem).stem}-{dof}.png")
     plot_torque_curve(result, out, f"{Path(problem).stem}: torques over {dof}")
     click.echo(f"zeros of the active torque over {dof} (other DOFs held at the problem's posture):")
     click.echo(

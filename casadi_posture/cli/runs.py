@@ -155,7 +155,9 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
             else "none"
         ),
     ]
-    if not task["held_at_start"]:
+    if report["stop"] == "interrupted" and not report["solver_statistics"]["steps"]:
+        lines.append("task: no step was run")
+    elif not task["held_at_start"]:
         lines.append(f"task never held: {task['lost']['reason'] if task['lost'] else 'no step'}")
     elif task["lost"]:
         lines.append(f"task held {task['held_s']:g} s, then lost: {task['lost']['reason']}")
