@@ -33,6 +33,7 @@ benchmark: $(BIN)/.installed
 	$(BIN)/python benchmarks/solvers.py
 	$(BIN)/python benchmarks/simulation.py
 	$(BIN)/python benchmarks/whatif.py
+	$(BIN)/python benchmarks/fuzz.py --examples 600
 
 lint: $(BIN)/.installed
 	$(BIN)/ruff check .

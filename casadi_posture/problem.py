@@ -62,6 +62,8 @@ class Problem:
 
     def hierarchy(self) -> TaskHierarchy:
         """The problem's tasks grouped into priority levels (built once per call)."""
+        if not self.spec.tasks:
+            raise ProblemError(self.path, "tasks", MISSING, "at least one task to solve")
         return TaskHierarchy(self.body, tasks_from_specs(self.spec.tasks, self.body))
 
     def torque_model(self) -> TorqueModel:

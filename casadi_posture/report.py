@@ -8,12 +8,13 @@ from typing import Any
 
 
 def fmt(value: Any, digits: int = 3) -> str:
-    """A cell: floats with fixed decimals, infinity as 'inf', None as '-'."""
+    """A cell: floats with fixed decimals, an unlimited value (infinity) as '∞', None as '-'.
+    A nan, which no answer may carry, shows as 'nan' so that it cannot hide."""
     if value is None:
         return "-"
     if isinstance(value, float):
         if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
+            return "∞" if value > 0 else "-∞"
         text = f"{value:.{digits}f}"
         return text[1:] if text.startswith("-") and float(text) == 0.0 else text
     return str(value)

@@ -55,7 +55,11 @@ def summary(result: SimulationResult) -> dict[str, Any]:
             }
         )
     limiting = min(
-        (g for g in groups if g["initial_endurance_min"] is not None and g["initial_load_pct_mvc"]),
+        (
+            g
+            for g in groups
+            if g["initial_endurance_min"] is not None and math.isfinite(g["initial_endurance_min"])
+        ),
         key=lambda g: (g["initial_endurance_min"], -g["initial_load_pct_mvc"]),
         default=None,
     )

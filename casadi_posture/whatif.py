@@ -52,6 +52,8 @@ def parse_vary(text: str, problem: str | None = None) -> tuple[str, list[Any]]:
     if any(not p.strip() for p in parts):
         raise ProblemError(problem, "--vary", text, "no empty value between commas")
     values = [parse_value(p.strip()) for p in parts]
+    if len({repr(v) for v in values}) != len(values):
+        raise ProblemError(problem, "--vary", text, "each value once")
     if any(isinstance(v, float) for v in values):
         values = [float(v) if isinstance(v, int) and not isinstance(v, bool) else v for v in values]
     return key, values

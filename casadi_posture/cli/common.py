@@ -24,8 +24,12 @@ class _Commands(click.Group):
     Ctrl-C into one line and exit code 130 (click alone says "Aborted!" and exits 1)."""
 
     def invoke(self, ctx: click.Context) -> Any:
+        words = [*getattr(ctx, "_protected_args", []), *ctx.args]
         try:
             return super().invoke(ctx)
+        except click.UsageError as error:
+            click.echo(f"error: {_usage(error, words)}", err=True)
+            ctx.exit(2)
         except ProblemError as error:
             click.echo(f"error: {error}", err=True)
             ctx.exit(2)
@@ -35,6 +39,14 @@ class _Commands(click.Group):
         except KeyboardInterrupt:
             click.echo("interrupted", err=True)
             ctx.exit(INTERRUPTED)
+
+
+def _usage(error: click.UsageError, words: list[str]) -> str:
+    """A command-line mistake in one line naming the problem file it concerns, if any."""
+    files = [w for w in words[1:] if not w.startswith("-") and w.endswith(".toml")]
+    where = f"{files[0]}: " if files else ""
+    command = error.ctx.command_path if error.ctx is not None else "casadi-posture"
+    return f"{where}{error.format_message()} (see {command} -h)"
 
 
 @click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
