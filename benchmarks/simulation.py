@@ -36,6 +36,7 @@ def main() -> None:
                     result.wall_time_s / max(simulated_min, 1e-9),
                     100 * (1 - result.ik_time_s / result.wall_time_s),
                     result.timeline.time.size,
+                    result.ik_fallbacks,
                     result.ik_failures,
                 ]
             )
@@ -49,6 +50,7 @@ def main() -> None:
                 "wall per simulated min (s)",
                 "outside IK (%)",
                 "steps",
+                "steps by the other solver",
                 "IK failures",
             ],
             rows,

@@ -78,6 +78,17 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     for k, half in enumerate(result.problem.body.half_joints):
         if tl.fatigue[:, k].max() > 0:
             ax.plot(tl.time / 60, tl.fatigue[:, k], lw=1.8, label=half.name)
+    over = [e for e in result.events if e.kind == "over_strength"]
+    if over:
+        ax.plot(
+            [e.time_s / 60 for e in over],
+            [1.0] * len(over),
+            "x",
+            color="tab:red",
+            ms=10,
+            mew=2,
+            label="over strength: exhausted at once",
+        )
     ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=1, label="fatigue threshold")
     ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=1, label="recovery threshold")
     active = tl.owner >= 0

@@ -147,9 +147,16 @@ def plot_outcomes(
         for key, values in varies:
             others = [k for k in keys if k != key]
             fig, ax = plt.subplots(figsize=(6.0, 4.0), dpi=110)
-            groups = sorted({tuple(str(r.get(k)) for k in others) for r in ran})
+            given = {k: [str(v) for v in values] for k, values in varies}
+            groups = sorted(
+                {tuple(str(_value(r, k)) for k in others) for r in ran},
+                key=lambda g: [
+                    given[k].index(v) if v in given[k] else -1
+                    for k, v in zip(others, g, strict=True)
+                ],
+            )
             for group in groups:
-                members = [r for r in ran if tuple(str(r.get(k)) for k in others) == group]
+                members = [r for r in ran if tuple(str(_value(r, k)) for k in others) == group]
                 members.sort(key=lambda r: _position(r, key, values))
                 xs = np.array([_position(r, key, values) for r in members], dtype=float)
                 ys = np.array([_number(r.get(outcome)) for r in members])
