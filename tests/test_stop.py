@@ -113,7 +113,12 @@ def test_ctrl_c_stops_a_parallel_batch_keeping_finished_cases(tmp_path: Path) ->
     kept = {p.name for p in cases.iterdir() if not p.name.startswith(".")}
     assert {"a0", "a1"} <= kept and len(kept) < 6
     assert not list(cases.glob(".tmp-*"))
-    assert not _live_in_group(process.pid), "worker processes outlived the batch"
+    # Multiprocessing's resource tracker leaves once the batch's end of its pipe closes.
+    deadline = time.monotonic() + STOP_WITHIN_S
+    while _live_in_group(process.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    left = _live_in_group(process.pid)
+    assert not left, f"processes outlived the batch: {left}"
     assert {r["case"] for r in _rows(out / "summary.csv")} == kept
     stamps = {n: (cases / n / "row.json").stat().st_mtime_ns for n in kept}
     # Finish the run with shorter long cases: a changed unfinished case is allowed.
