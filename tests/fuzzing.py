@@ -378,8 +378,8 @@ def run_case(case: Case, folder: Path) -> Outcome:
     if result.exit_code not in (0, 1, 2):
         problems.append(f"exit code {result.exit_code}")
     text = result.stdout + result.stderr
-    if "Traceback" in text:
-        problems.append("a traceback in the output")
+    if "Traceback" in text or "internal error" in text:
+        problems.append("a traceback or an internal error in the output")
     if result.exit_code == 2:
         lines = result.stderr.strip().splitlines()
         if not lines or len(lines) > 3:

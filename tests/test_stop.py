@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
 
@@ -230,3 +231,36 @@ def test_ctrl_c_during_startup_is_one_line() -> None:
     time.sleep(0.2)
     code, _, stderr = _ctrl_c(process)
     assert code == 130 and stderr.strip() == "interrupted", (code, stderr)
+
+
+def test_a_whatif_over_a_problem_without_tasks_lists_its_cases_as_skipped(tmp_path: Path) -> None:
+    result = run(
+        "whatif",
+        PROBLEMS / "frontal_elbow.toml",
+        "--vary",
+        "body.mass_kg=60,80",
+        "--quiet",
+        "--out",
+        tmp_path / "w",
+    )
+    assert result.exit_code == 0, result.output
+    assert result.output.count("skipped: no tasks to hold") == 2
+
+
+def test_an_internal_error_is_one_line_unless_asked_for(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import casadi_posture.cli.model as model
+
+    def broken(problem):
+        raise RuntimeError("unexpected\nsecond line")
+
+    monkeypatch.setattr(model, "description", broken)
+    result = run("describe", PROBLEMS / "holding_m45.toml")
+    assert result.exit_code == 1
+    assert result.stderr.strip().splitlines() == [
+        "internal error: RuntimeError: unexpected (a bug: please report it with the command "
+        "line; CASADI_POSTURE_DEBUG=1 shows the traceback)"
+    ]
+    monkeypatch.setenv("CASADI_POSTURE_DEBUG", "1")
+    assert isinstance(run("describe", PROBLEMS / "holding_m45.toml").exception, RuntimeError)

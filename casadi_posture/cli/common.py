@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from typing import Any
 
 import click
@@ -17,6 +18,9 @@ from ..solvers import SOLVER_NAMES
 from ..static import GroupLoad, group_loads, rule
 
 INTERRUPTED = interrupt.EXIT_CODE
+
+#: Set this environment variable to see the traceback of an internal error.
+DEBUG = "CASADI_POSTURE_DEBUG"
 
 
 class _Commands(click.Group):
@@ -39,6 +43,16 @@ class _Commands(click.Group):
         except KeyboardInterrupt:
             click.echo("interrupted", err=True)
             ctx.exit(INTERRUPTED)
+        except Exception as error:  # a bug: one line for the user, the traceback on request
+            if os.environ.get(DEBUG):
+                raise
+            first = (str(error).splitlines() or [""])[0]
+            click.echo(
+                f"internal error: {type(error).__name__}: {first} (a bug: please report it "
+                f"with the command line; {DEBUG}=1 shows the traceback)",
+                err=True,
+            )
+            ctx.exit(1)
 
 
 def _usage(error: click.UsageError, words: list[str]) -> str:

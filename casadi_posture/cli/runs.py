@@ -336,10 +336,9 @@ def whatif(
     rows = []
     for row in sorted(report.rows, key=position):
         line = [row.get("solver") if k == "solver" else row.get(k) for k in keys]
-        if row["status"] == "failed":
-            rows.append(
-                line + [None] * (len(headers) - len(line) - 1) + [f"failed: {row['error']}"]
-            )
+        if row["status"] in ("failed", "skipped"):
+            reason = f"{row['status']}: {row['error']}"
+            rows.append(line + [None] * (len(headers) - len(line) - 1) + [reason])
             continue
         line += [
             _yes_no(row.get("reached")),
