@@ -31,8 +31,10 @@ class _Commands(click.Group):
         words = [*getattr(ctx, "_protected_args", []), *ctx.args]
         try:
             return super().invoke(ctx)
-        except click.UsageError as error:
-            click.echo(f"error: {_usage(error, words)}", err=True)
+        except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException) as done:
+            if not isinstance(done, click.UsageError):
+                raise
+            click.echo(f"error: {_usage(done, words)}", err=True)
             ctx.exit(2)
         except ProblemError as error:
             click.echo(f"error: {error}", err=True)
