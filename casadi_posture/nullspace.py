@@ -41,7 +41,7 @@ class NullspaceOptions:
     inequality the activation slack ``limit_slack`` lets the posture chatter by about
     2e-12 rad, so the tolerance must stay well above it.
 
-    Stall (SPEC §4): an inequality that conflicts with a higher level makes the recursion
+    Stall: an inequality that conflicts with a higher level makes the recursion
     limit-cycle. The iteration stops with status ``stalled`` when ``stall_iterations``
     iterations in a row bring no progress, or when it comes to rest at a posture worse
     than one it passed. Progress is a lexicographic decrease of (inequality violation,

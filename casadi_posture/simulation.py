@@ -3,7 +3,7 @@
 Per step of simulated time: solve the IK from the last posture with the current
 fatigue constraint (the other solver takes over a step the first fails or stalls
 on); evaluate the torques; update every half-joint's fatigue over the step at the
-new posture's load (a load above 100 %MVC exhausts the group at once: SPEC §2);
+new posture's load (a load above 100 %MVC exhausts the group at once);
 apply the hysteresis; build the constraint for the next step. Every CasADi object
 is built once, before the loop.
 """

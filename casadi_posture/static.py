@@ -1,5 +1,5 @@
 """Static answers at one posture: each half-joint's load and endurance, by the rule the
-simulation follows (SPEC §2, Feasibility and one rule for "unlimited").
+simulation follows (feasibility, and one rule for "unlimited").
 
 - A group that carries nothing (the antagonist of the one holding the load) never tires.
 - A load above 100 %MVC exceeds the group's strength: the posture cannot be held at all,
