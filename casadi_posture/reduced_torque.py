@@ -134,14 +134,26 @@ def _table_1(
 
 
 def _opposite_side(joint: JointState, ta: float, case: str) -> tuple[float, float]:
-    """Cases 1.2/1.3: the side of θc whose end has the sign opposite to τa. The paper assumes
-    τa increases (1.2 searches below θc, 1.3 above); where it decreases, the other side."""
+    """Cases 1.2/1.3: the paper assumes τa increases, so 1.2 searches below θc and 1.3
+    above. Each searches its own side first, and the other side only when its own end has
+    the sign of τa (no zero there) and the other end does not (τa decreases instead)."""
     c = joint.angle
-    if np.sign(float(joint.active(joint.lower))) != np.sign(ta):
-        return joint.lower, c
-    if np.sign(float(joint.active(joint.upper))) != np.sign(ta):
-        return c, joint.upper
-    return (joint.lower, c) if case == "1.2" else (c, joint.upper)
+    below, above = (joint.lower, c), (c, joint.upper)
+    own, other = (below, above) if case == "1.2" else (above, below)
+    own_end, other_end = (
+        (joint.lower, joint.upper)
+        if case == "1.2"
+        else (
+            joint.upper,
+            joint.lower,
+        )
+    )
+    sign = np.sign(ta)
+    if np.sign(float(joint.active(own_end))) != sign:
+        return own
+    if np.sign(float(joint.active(other_end))) != sign:
+        return other
+    return own
 
 
 def _same_sign_interval(

@@ -84,6 +84,61 @@ def test_case_1_3_negative_torque_searches_above() -> None:
     assert goal.angle > 1.0
 
 
+def test_case_1_3_with_zeros_on_both_sides_searches_above_first() -> None:
+    """Only the upper-limit passive term, τp = -exp(-8(2.2 - θ)), under τe = -1 + 2θ: one
+    slope angle (2.2 - ln(4)/8, a minimum of τa), τa(1.5) = -2.0 and both range ends
+    positive, so a zero lies on each side of θc. Case 1.3 searches above θc first."""
+
+    def upper_only(theta):
+        return -np.exp(-8 * (2.2 - np.asarray(theta)))
+
+    def upper_only_slope(theta):
+        return -8 * np.exp(-8 * (2.2 - np.asarray(theta)))
+
+    j = joint(1.5, -1.0, tau_p=upper_only, dtau_p=upper_only_slope)
+    assert len(slope_angles(j)) == 1
+    (below,) = zeros_on(j, LOWER, 1.5)
+    (above,) = zeros_on(j, 1.5, UPPER)
+    goal = goal_angle(j, "active", r_min=0.9, epsilon=EPS)
+    assert goal.case == "1.3"
+    assert goal.angle == pytest.approx(above, abs=SCAN)
+    assert below < 1.5 < goal.angle
+
+
+def test_case_1_2_with_zeros_on_both_sides_searches_below_first() -> None:
+    """The mirror image: only the lower-limit term, τp = exp(-10θ), under τe = -3 + 2θ: one
+    slope angle (ln(5)/10, a maximum of τa), τa(1.0) = 1.0 and both range ends negative.
+    Case 1.2 searches below θc first."""
+
+    def lower_only(theta):
+        return np.exp(-10 * np.asarray(theta))
+
+    def lower_only_slope(theta):
+        return -10 * np.exp(-10 * np.asarray(theta))
+
+    j = joint(1.0, -3.0, tau_p=lower_only, dtau_p=lower_only_slope)
+    assert len(slope_angles(j)) == 1
+    (below,) = zeros_on(j, LOWER, 1.0)
+    (above,) = zeros_on(j, 1.0, UPPER)
+    goal = goal_angle(j, "active", r_min=0.9, epsilon=EPS)
+    assert goal.case == "1.2"
+    assert goal.angle == pytest.approx(below, abs=SCAN)
+    assert goal.angle < 1.0 < above
+
+
+def test_never_worse_than_staying_is_labelled() -> None:
+    """Case 3.3 (dτe = 1, τe(0) = -4, θc = -0.15): the extrapolated τa changes sign, but not
+    between the slope angles, so the dichotomy there returns the end with the smaller |τa|,
+    which is still larger than at θc. The goal stays at θc and the case says why."""
+    j = joint(-0.15, -4.0, slope=1.0)
+    s_min, s_max = slope_angles(j)
+    assert not zeros_on(j, s_min, s_max)
+    ends = min(abs(float(j.active(s_min))), abs(float(j.active(s_max))))
+    assert ends > abs(float(j.active(-0.15)))
+    goal = goal_angle(j, "active", r_min=0.9, epsilon=EPS)
+    assert goal.angle == -0.15 and goal.case == "3.3 (kept θc: no reduction)"
+
+
 def test_case_1_2_with_a_decreasing_active_torque_searches_the_other_side() -> None:
     """No passive torque and dτe = 2: τa = 3 - 2θ decreases; its zero 1.5 lies above θc."""
 
