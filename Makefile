@@ -19,8 +19,8 @@ demo: $(BIN)/.installed
 		--out $(DEMO_OUT)/holding_m45-active
 	$(BIN)/casadi-posture simulate problems/holding_m45.toml --strategy passive \
 		--out $(DEMO_OUT)/holding_m45-passive
-	$(BIN)/casadi-posture simulate problems/line_plane_hysteresis_free_elbow.toml \
-		--out $(DEMO_OUT)/line_plane_hysteresis_free_elbow
+	$(BIN)/casadi-posture simulate problems/line_plane_hysteresis.toml \
+		--out $(DEMO_OUT)/line_plane_hysteresis
 	$(BIN)/casadi-posture compare problems/*.toml --out $(DEMO_OUT)
 	$(BIN)/casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion \
 		--out $(DEMO_OUT)/frontal_elbow_fig3.png

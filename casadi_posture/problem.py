@@ -25,11 +25,19 @@ from .loads import Load
 from .models import MODELS
 from .overrides import apply
 from .parameters import Parameter
-from .passive import ExponentialPassive, NoPassive, PassiveTorque
+from .passive import (
+    ExponentialPassive,
+    NoPassive,
+    PassiveTorque,
+    ReshapedPassive,
+    limit_torque,
+)
 from .schema import (
     ComTask,
+    DofSpec,
     ExponentialPassiveSpec,
     HalfJointSpec,
+    NoPassiveSpec,
     OrientationTask,
     PostureTask,
     ProblemSpec,
@@ -179,9 +187,7 @@ def resolve(spec: ProblemSpec, path: Path) -> Problem:
             hi = hi.overridden(override.range_deg[1], where)
         ranges[name] = (math.radians(lo.value), math.radians(hi.value))
         records += [lo, hi]
-        passive[name], passive_records = _passive(
-            name, None if override is None else override.passive, path
-        )
+        passive[name], passive_records = _passive(name, override, ranges[name], path)
         records += passive_records
 
     gravity = records[0].value
@@ -243,30 +249,115 @@ def _override_segment(inertia: SegmentInertia, override: Any, path: Path) -> Seg
     return replace(updated, parameters=tuple(records))
 
 
-def _passive(dof: str, override: Any, path: Path) -> tuple[PassiveTorque, list[Parameter]]:
+#: The passive model of a DOF whose file says nothing of it.
+DEFAULT_PASSIVE_MODEL = "limit_torque"
+_EXPONENTIAL_KEYS = ("k1", "k2", "q1", "k3", "k4", "q2")
+
+
+def _passive(
+    dof: str, spec: DofSpec | None, limits: tuple[float, float], path: Path
+) -> tuple[PassiveTorque, list[Parameter]]:
+    """The passive torque of ``dof`` and its parameter records: the model the file names
+    (default ``limit_torque``, anchored at the anatomical range of motion, not at the file's
+    ``range_deg``: extending the range lets the joint into the tissue's steep rise past its
+    limit), reshaped near the limits of the range ``limits`` [rad] if asked."""
+    override = None if spec is None else spec.passive
+    where = f"{path} body.dofs.{dof}.passive"
+    name = DEFAULT_PASSIVE_MODEL if override is None else override.model
     table = parameters.load("joints")
-    names = ("k1", "k2", "q1", "k3", "k4", "q2")
-    records = [table[f"joints.{dof}.passive.{k}"] for k in names]
-    if override is not None and not isinstance(override, ExponentialPassiveSpec):
-        return NoPassive(), [
-            Parameter(
-                f"joints.{dof}.passive.model", "none", "", f"{path} body.dofs.{dof}.passive", "user"
-            )
-        ]
-    if override is not None:
-        where = f"{path} body.dofs.{dof}.passive"
-        given = (
-            override.k1_Nm,
-            override.k2_per_rad,
-            override.q1_deg,
-            override.k3_Nm,
-            override.k4_per_rad,
-            override.q2_deg,
+    chosen = Parameter(
+        f"joints.{dof}.passive.model",
+        name,
+        "",
+        "the default passive model" if override is None else where,
+        "estimate" if override is None else "user",
+    )
+    if isinstance(override, NoPassiveSpec):
+        return NoPassive(), [chosen]
+    if name == "limit_torque":
+        prefix = f"joints.{dof}.passive.limit_torque."
+        limit, decade = table[prefix + "limit"], table[prefix + "decade"]
+        lower, upper = table[f"joints.{dof}.range.lower"], table[f"joints.{dof}.range.upper"]
+        given = {} if override is None else override.model_dump()
+        limit = (
+            limit if given.get("limit_Nm") is None else limit.overridden(given["limit_Nm"], where)
         )
-        records = [r.overridden(v, where) for r, v in zip(records, given, strict=True)]
-    k1, k2, q1, k3, k4, q2 = (r.value for r in records)
-    model = ExponentialPassive(k1, k2, math.radians(q1), k3, k4, math.radians(q2))
+        decade = (
+            decade if given.get("decade") is None else decade.overridden(given["decade"], where)
+        )
+        lower = (
+            lower if given.get("lower_deg") is None else lower.overridden(given["lower_deg"], where)
+        )
+        upper = (
+            upper if given.get("upper_deg") is None else upper.overridden(given["upper_deg"], where)
+        )
+        if not lower.value < upper.value:
+            raise ProblemError(
+                path,
+                f"body.dofs.{dof}.passive",
+                [lower.value, upper.value],
+                "lower_deg < upper_deg",
+            )
+        anatomical = (math.radians(lower.value), math.radians(upper.value))
+        model: PassiveTorque = limit_torque(*anatomical, limit.value, decade.value)
+        records = [chosen, limit, decade, *_derived(dof, model)]
+    else:
+        prefix = f"joints.{dof}.passive.gymnast_fit."
+        records = [table[prefix + k] for k in _EXPONENTIAL_KEYS]
+        if isinstance(override, ExponentialPassiveSpec):
+            given = (
+                override.k1_Nm,
+                override.k2_per_rad,
+                override.q1_deg,
+                override.k3_Nm,
+                override.k4_per_rad,
+                override.q2_deg,
+            )
+            records = [r.overridden(v, where) for r, v in zip(records, given, strict=True)]
+        records = [
+            replace(r, name=f"joints.{dof}.passive.{k}")
+            for r, k in zip(records, _EXPONENTIAL_KEYS, strict=True)
+        ]
+        k1, k2, q1, k3, k4, q2 = (r.value for r in records)
+        model = ExponentialPassive(k1, k2, math.radians(q1), k3, k4, math.radians(q2))
+        records = [chosen, *records]
+    if spec is not None and spec.reshape is not None:
+        shape = spec.reshape
+        model = ReshapedPassive(
+            model, *limits, math.radians(shape.width_deg), shape.slope_Nm_per_rad, shape.step_Nm
+        )
+        records.append(
+            Parameter(
+                f"joints.{dof}.passive.reshape",
+                shape.model_dump(),
+                "deg, N·m/rad, N·m",
+                f"{path} body.dofs.{dof}.reshape",
+                "user",
+            )
+        )
     return model, records
+
+
+def _derived(dof: str, model: ExponentialPassive) -> list[Parameter]:
+    """The double exponential's coefficients that the limit-torque convention gives."""
+    values = (
+        (model.k1, "N·m"),
+        (model.k2, "1/rad"),
+        (math.degrees(model.q1), "deg"),
+        (model.k3, "N·m"),
+        (model.k4, "1/rad"),
+        (math.degrees(model.q2), "deg"),
+    )
+    return [
+        Parameter(
+            f"joints.{dof}.passive.{key}",
+            round(value, 6),
+            unit,
+            "derived: the limit torque at the anatomical limits, rate ln 10/(decade·range)",
+            "estimate",
+        )
+        for key, (value, unit) in zip(_EXPONENTIAL_KEYS, values, strict=True)
+    ]
 
 
 def _strength(

@@ -93,26 +93,62 @@ class ExponentialPassiveSpec(Strict):
     q2_deg: Angle
 
 
+class LimitTorquePassiveSpec(Strict):
+    """The limit-torque convention: ``limit_Nm`` at each anatomical limit (``lower_deg``,
+    ``upper_deg``; default: the shipped range of motion, whatever ``range_deg`` says),
+    tenfold over each ``decade`` (a fraction of that range) beyond it; unset keys take the
+    shipped values."""
+
+    model: Literal["limit_torque"]
+    limit_Nm: Annotated[float, Field(gt=0, le=MAX_PASSIVE_NM)] | None = None
+    decade: Annotated[float, Field(gt=0.001, le=1.0)] | None = None
+    lower_deg: Angle | None = None
+    upper_deg: Angle | None = None
+
+    @model_validator(mode="after")
+    def _limits(self) -> LimitTorquePassiveSpec:
+        if None not in (self.lower_deg, self.upper_deg) and not self.lower_deg < self.upper_deg:
+            raise ValueError("lower_deg < upper_deg")
+        return self
+
+
+class GymnastFitPassiveSpec(Strict):
+    model: Literal["gymnast_fit"]
+
+
 class NoPassiveSpec(Strict):
     model: Literal["none"]
 
 
 def passive_model_tag(value: object) -> str:
-    """The passive model's tag; a table without ``model`` is the exponential default."""
+    """The passive model's tag; a table without ``model`` is the exponential."""
     if isinstance(value, dict):
         return value.get("model", "exponential")
     return getattr(value, "model", "exponential")
 
 
 PassiveSpec = Annotated[
-    Annotated[ExponentialPassiveSpec, Tag("exponential")] | Annotated[NoPassiveSpec, Tag("none")],
+    Annotated[ExponentialPassiveSpec, Tag("exponential")]
+    | Annotated[LimitTorquePassiveSpec, Tag("limit_torque")]
+    | Annotated[GymnastFitPassiveSpec, Tag("gymnast_fit")]
+    | Annotated[NoPassiveSpec, Tag("none")],
     Discriminator(passive_model_tag),
 ]
+
+
+class ReshapeSpec(Strict):
+    """The paper's reshaping near both limits: within ``width_deg`` of a limit the passive
+    torque gains ``step_Nm + slope_Nm_per_rad·depth`` toward the middle of the range."""
+
+    width_deg: Annotated[float, Field(gt=0, le=90)]
+    slope_Nm_per_rad: Annotated[float, _between(0.0, MAX_PASSIVE_NM)]
+    step_Nm: Annotated[float, _between(0.0, MAX_PASSIVE_NM)] = 0.0
 
 
 class DofSpec(Strict):
     range_deg: AnglePair | None = None
     passive: PassiveSpec | None = None
+    reshape: ReshapeSpec | None = None
 
     _range = field_validator("range_deg")(lambda v: v if v is None else _increasing(v))
 

@@ -282,4 +282,7 @@ def test_a_passive_override_without_model_is_the_exponential(tmp_path: Path) -> 
     )
     result = run("validate", str(bad))
     assert result.exit_code == 2
-    assert "passive = 'springy': expected one of 'exponential', 'none'" in result.stderr
+    assert (
+        "passive = 'springy': expected one of 'exponential', 'limit_torque', 'gymnast_fit', 'none'"
+        in result.stderr
+    )

@@ -70,7 +70,7 @@ def test_solve_prints_posture_residuals_and_torques(solver: str) -> None:
     assert data["posture_deg"]["shoulder_flexion"] == pytest.approx(16.8833, abs=1e-3)
     assert [lv["unit"] for lv in data["levels"]] == ["m", "m"]
     assert max(lv["residual"] for lv in data["levels"]) < 1e-7
-    assert data["torques"]["dofs"][0]["active_Nm"] == pytest.approx(13.697, abs=1e-3)
+    assert data["torques"]["dofs"][0]["active_Nm"] == pytest.approx(13.698, abs=1e-3)
     text = run("solve", path, "--solver", solver).stdout
     assert "residual" in text and "joints at a limit: none" in text and "load (%MVC)" in text
 

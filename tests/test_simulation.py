@@ -19,8 +19,10 @@ from casadi_posture.simulation import simulate
 
 
 def _holding(duration: float = 240.0, **fatigue):
+    """The -25° hold: the constraint's goal is compatible with the line, so the posture is
+    unique and both solvers must follow the same path (on the -45° line it is not)."""
     return load_problem(
-        PROBLEMS / "holding_m45.toml",
+        PROBLEMS / "holding_m25.toml",
         {"simulation.duration_s": duration, **{f"fatigue.{k}": v for k, v in fatigue.items()}},
     )
 
@@ -108,7 +110,7 @@ def test_the_hyperplane_is_violated_by_the_step_and_points_to_the_goal() -> None
 
 @pytest.fixture(scope="module")
 def cycling():
-    problem = load_problem(PROBLEMS / "line_plane_hysteresis_free_elbow.toml")
+    problem = load_problem(PROBLEMS / "line_plane_hysteresis.toml")
     return {name: simulate(problem, name) for name in ("nullspace", "lexicographic")}
 
 
@@ -198,7 +200,7 @@ def test_simulate_bad_option_is_one_line(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     ("strategy", "low", "high", "cases"),
-    [("active", 85.0, 95.0, {"3.3"}), ("passive", -10.0, 0.0, {"3.2", "3.4"})],
+    [("active", 85.0, 95.0, {"3.3"}), ("passive", -10.0, 0.0, {"3.2"})],
 )
 def test_the_strategies_reach_their_two_posture_families(strategy, low, high, cases) -> None:
     """Active: the mid-range zero (forearm vertical); passive: near the extension limit."""
@@ -242,4 +244,6 @@ def test_without_slope_matching_strategy_and_r_min_change_nothing() -> None:
     assert first.half_joint == "elbow_extensors"
     assert {c[:1] for c in runs[0].timeline.case if c} == {"1"}
     assert np.array_equal(runs[0].timeline.q, runs[1].timeline.q)
-    assert "constraint_off" in [e.kind for e in runs[0].events]
+    assert [(e.kind, e.time_s) for e in runs[0].events] == [
+        (e.kind, e.time_s) for e in runs[1].events
+    ]

@@ -21,7 +21,7 @@ from casadi_posture.cli import main
 #: Ctrl-C must stop a run within this [s], files written included.
 STOP_WITHIN_S = 2.0
 
-CYCLES = (PROBLEMS / "line_plane_hysteresis_free_elbow.toml").read_text()
+CYCLES = (PROBLEMS / "line_plane_hysteresis.toml").read_text()
 HOLD = (PROBLEMS / "holding_m45.toml").read_text()
 
 

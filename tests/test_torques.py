@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 from conftest import PROBLEMS, chain_3d
 
-from casadi_posture import parameters
 from casadi_posture.curve import torque_curve
 from casadi_posture.loads import Load, pack
-from casadi_posture.passive import ExponentialPassive, NoPassive
+from casadi_posture.passive import ExponentialPassive, NoPassive, ReshapedPassive
 from casadi_posture.problem import load_problem
 from casadi_posture.strength import ConstantStrength, TabulatedStrength
 from casadi_posture.torques import TorqueModel
@@ -125,21 +124,86 @@ def test_default_passive_torque_strictly_decreasing(dof: str) -> None:
     assert values[0] > 0 > values[-1]
 
 
-def test_passive_torque_values_of_biomech_data() -> None:
-    """biomech-data §1.3 check: elbow τp(-10°) = +101, τp(150°) = -70, τp(90°) = -0.014 N·m."""
-    t = parameters.load("joints")
-    k = {
-        n: t[f"joints.elbow_flexion.passive.{n}"].value
-        for n in ("k1", "k2", "q1", "k3", "k4", "q2")
-    }
-    model = ExponentialPassive(
-        k["k1"], k["k2"], math.radians(k["q1"]), k["k3"], k["k4"], math.radians(k["q2"])
+def _passive_values(problem, dof: str, degrees) -> np.ndarray:
+    q = ca.SX.sym("q")
+    f = ca.Function("tp", [q], [problem.passive[dof].expression(q)])
+    return np.asarray(f(np.radians(np.atleast_1d(degrees)))).ravel()
+
+
+@pytest.mark.parametrize(
+    ("dof", "lower", "upper", "inside"),
+    [("shoulder_flexion", -60.0, 180.0, 1.915), ("elbow_flexion", 0.0, 150.0, 1.077)],
+)
+def test_default_passive_torque_has_measured_magnitudes(
+    dof: str, lower: float, upper: float, inside: float
+) -> None:
+    """The limit-torque default: 5 N·m at each anatomical limit (PredSim's convention), ten
+    times less 5 % of the range inside it (5·10^(-5/(0.05·range))), and over the middle
+    80 % of the range a stiffness no larger than the 0.4-1.8 N·m/rad measured at the elbow
+    (Wiegner & Watts 1986), where the earlier Gymnast fit gave tens of N·m inside the range."""
+    problem = _arm()
+    at = _passive_values(problem, dof, [lower, lower + 5, upper - 5, upper])
+    assert at == pytest.approx([5.0, inside, -inside, -5.0], abs=1e-3)
+    assert 5.0 * 10 ** (-5 / (0.05 * (upper - lower))) == pytest.approx(inside, abs=1e-3)
+    middle = np.linspace(lower + 0.1 * (upper - lower), upper - 0.1 * (upper - lower), 500)
+    stiffness = -np.gradient(_passive_values(problem, dof, middle), np.radians(middle))
+    assert 0 < stiffness.max() < 1.8
+
+
+def test_the_gymnast_fit_is_a_named_alternative(tmp_path) -> None:
+    """The earlier default, chosen by name: elbow τp(-10°) = +101, τp(150°) = -70 and
+    τp(90°) = -0.014 N·m (1 N·m at the Gymnast zero-passive angles, τ_ISO at the one-norm
+    ones)."""
+    path = tmp_path / "gymnast.toml"
+    path.write_text(
+        (PROBLEMS / "holding_m45.toml")
+        .read_text()
+        .replace(
+            "[posture_deg]",
+            '[body.dofs.elbow_flexion]\npassive = { model = "gymnast_fit" }\n\n[posture_deg]',
+        )
     )
+    values = _passive_values(load_problem(path), "elbow_flexion", [-10.0, 150.0, 90.0])
+    assert values == pytest.approx([101.0, -70.0, -0.014], rel=0.01, abs=0.001)
+
+
+def test_the_limit_torque_stays_at_the_anatomical_limits_when_the_range_grows() -> None:
+    """frontal_elbow.toml lets the elbow 10° past straight: the tissue's limit stays at 0°,
+    so the passive torque rises steeply beyond it (5 N·m at 0°, about 107 N·m at -10°)."""
+    values = _passive_values(
+        load_problem(PROBLEMS / "frontal_elbow.toml"), "elbow_flexion", [0.0, -10.0]
+    )
+    assert values[0] == pytest.approx(5.0, abs=1e-9)
+    assert values[1] == pytest.approx(5.0 * math.exp(math.log(10) / (0.05 * 150) * 10), rel=1e-9)
+
+
+@pytest.mark.parametrize("step", [0.0, 2.0])
+def test_the_reshaped_passive_curve(step: float) -> None:
+    """The paper's reshaping: within 10° of each limit a linear term of 20 N·m/rad (and a
+    step) is added toward the middle of the range. Continuous without a step; a jump of
+    exactly the step at each band's edge with one; monotonically decreasing either way; and
+    the numeric slope the goal algorithm uses matches the expression's."""
+    base = ExponentialPassive(5.0, 17.59, 0.0, 5.0, 17.59, math.radians(150))
+    model = ReshapedPassive(base, 0.0, math.radians(150), math.radians(10), 20.0, step)
     q = ca.SX.sym("q")
     f = ca.Function("tp", [q], [model.expression(q)])
-    assert float(f(math.radians(-10))) == pytest.approx(101.0, rel=0.01)
-    assert float(f(math.radians(150))) == pytest.approx(-70.0, rel=0.01)
-    assert float(f(math.radians(90))) == pytest.approx(-0.014, abs=0.001)
+    grid = np.radians(np.linspace(0, 150, 30001))
+    values = np.asarray(f(grid)).ravel()
+    assert np.all(np.diff(values) < 0)
+    for edge in (math.radians(10), math.radians(140)):
+        before, after = float(f(edge - 1e-9)), float(f(edge + 1e-9))
+        assert before - after == pytest.approx(step, abs=1e-6)
+    inside = math.radians(4)
+    expected = float(base.expression(ca.DM(inside))) + step + 20.0 * (math.radians(10) - inside)
+    assert float(f(inside)) == pytest.approx(expected, rel=1e-12)
+    value, slope = model.numeric(np.array([inside, math.radians(80), math.radians(147)]))
+    numeric = np.asarray(
+        f([inside + 1e-7, math.radians(80) + 1e-7, math.radians(147) + 1e-7])
+    ) - np.asarray(f([inside - 1e-7, math.radians(80) - 1e-7, math.radians(147) - 1e-7]))
+    assert slope == pytest.approx(numeric.ravel() / 2e-7, rel=1e-5)
+    assert value == pytest.approx(
+        np.asarray(f([inside, math.radians(80), math.radians(147)])).ravel()
+    )
 
 
 def test_active_torque_balances_and_half_joints_split_it() -> None:
