@@ -56,6 +56,7 @@ LEADING = (
     "solver",
     "strategy",
     "r_min",
+    "recovery_law",
     "reached",
     "limiting_group_at_start",
     "limiting_endurance_at_start_min",
@@ -169,7 +170,7 @@ def run_case(case: Case) -> Outcome:
             "solver": case.solver or problem.spec.solver.name,
             "strategy": problem.spec.fatigue.strategy,
             "r_min": problem.spec.fatigue.r_min,
-            "fatigue_model": problem.fatigue.name,
+            "recovery_law": problem.fatigue.name,
             "endurance_rule": rule(problem),
         }
         if case.simulate and not problem.tasks:

@@ -21,7 +21,7 @@ from casadi_posture.endurance import PERCENT, EnduranceModel
 from casadi_posture.errors import ProblemError
 from casadi_posture.parameters import Parameter
 
-DEFAULT_FATIGUE_MODEL = "holding_time"
+DEFAULT_RECOVERY_LAW = "threshold"
 _REGION_TABLE = "fatigue.frey_law_2012."
 
 
@@ -49,6 +49,10 @@ class FatigueModel(Protocol):
 
     def rule(self) -> str:
         """One line saying when this model gives an unlimited endurance."""
+        ...
+
+    def settings(self) -> dict[str, object]:
+        """The law's name and parameters, for summaries and manifests."""
         ...
 
     def parameters(self) -> list[Parameter]:
@@ -96,21 +100,23 @@ def _check_positive(value: float, key: str, expected: str) -> None:
 
 
 class HoldingTimeFatigue:
-    """Paper eq. 7 used incrementally, with the recovery law of biomech-data §4.5 (SPEC §3).
+    """Paper eq. 7 used incrementally, with a recovery law: ``threshold`` or ``continuous``.
 
-    State: fatigue ``F`` per half-joint, shape (n,), rested at 0; level = ``F``. Over a step of
-    ``dt`` [s] at a constant load ``T_N`` [%MVC]:
+    State: fatigue ``F`` per half-joint, shape (n,), rested at 0; level = ``F`` (at most 1).
+    At a constant load ``T_N`` [%MVC], with ``ET`` [s] the endurance model's time, ``R_j``
+    [1/s] the Frey-Law 2012 recovery rate of the region and ``r = r_rest`` (15) when the
+    half-joint carries no torque (``T_N = 0``), else 1:
 
-    - ``T_N > T_0``: ``F ← F + dt / ET(T_N)``, ``ET`` [s] from the endurance model;
-    - ``T_N ≤ T_0``: ``F ← F·exp(−r·R_j·dt)``, the exact solution of ``dF/dt = −r·R_j·F``, with
-      ``R_j`` [1/s] the Frey-Law 2012 recovery rate of the region and ``r = r_rest`` (15) when
-      the half-joint carries no torque (``T_N = 0``), else 1.
+    - ``threshold`` (the default): above ``T_0`` ``dF/dt = 1/ET`` and no recovery; at or
+      below ``T_0`` ``dF/dt = −r·R_j·F``. A group loaded above ``T_0`` never recovers.
+    - ``continuous``: ``dF/dt = [T_N > T_0]/ET − r·R_j·F``, the recovery term always acting,
+      so a group tires more slowly under load and may never reach exhaustion: F tends to
+      ``R_∞ = 1/(ET·r·R_j)``.
 
-    ``T_0`` (default 15 %MVC) is what stops accumulation at small loads: Manenica's ``ET`` is
-    finite even at 0 %MVC.
+    Both are linear in F over a step ``dt`` [s] and are integrated exactly. ``T_0`` (default
+    15 %MVC) is what stops accumulation at small loads: Manenica's ``ET`` is finite even at
+    0 %MVC.
     """
-
-    name = "holding_time"
 
     def __init__(
         self,
@@ -118,18 +124,19 @@ class HoldingTimeFatigue:
         endurance: EnduranceModel,
         *,
         recovery_threshold_pct_mvc: float | None = None,
+        continuous: bool = False,
     ) -> None:
         self.regions = tuple(regions)
         self.endurance = endurance
+        self.name = "continuous" if continuous else "threshold"
+        self._continuous = continuous
         self._endurance_parameters = endurance.parameters(self.regions)
         self._threshold = _with_user_value(
-            _data("holding_time.recovery_threshold"),
-            recovery_threshold_pct_mvc,
-            "recovery_threshold_pct_mvc",
+            _data("load_threshold"), recovery_threshold_pct_mvc, "load_threshold_pct_mvc"
         )
         if not self._threshold.value >= 0:
             raise ProblemError(
-                None, "recovery_threshold_pct_mvc", self._threshold.value, "a load ≥ 0 %MVC"
+                None, "load_threshold_pct_mvc", self._threshold.value, "a load ≥ 0 %MVC"
             )
         self._rest_multiplier = _data("rest_multiplier")
         self._recovery_rates = _region_rates(self.regions, "recovery_rate")
@@ -144,16 +151,25 @@ class HoldingTimeFatigue:
         return np.zeros(len(self.regions))
 
     def step(self, state: np.ndarray, load_pct_mvc: ArrayLike, dt_s: float) -> np.ndarray:
-        """Fatigue after ``dt_s`` [s] at constant loads [%MVC]: grows above ``T_0``, else decays."""
+        """Fatigue after ``dt_s`` [s] at constant loads [%MVC], by the exact solution of the
+        law's linear equation over the step."""
         _check_time_step(dt_s)
         fatigue = np.asarray(state, dtype=float)
         load = np.broadcast_to(np.asarray(load_pct_mvc, dtype=float), fatigue.shape)
-        endurance_s = np.empty_like(fatigue)
+        growth = self._growth(load)
+        decay = np.where(load == 0, self._rest_multiplier.value, 1.0) * self._recovery_rate
+        recovered = fatigue * np.exp(-decay * dt_s)
+        if not self._continuous:
+            return np.where(growth > 0, fatigue + growth * dt_s, recovered)
+        settled = growth / decay
+        return settled + (fatigue - settled) * np.exp(-decay * dt_s)
+
+    def _growth(self, load: np.ndarray) -> np.ndarray:
+        """``[T_N > T_0]/ET`` [1/s] of every half-joint."""
+        endurance_s = np.empty_like(load)
         for region, index in self._half_joints.items():
             endurance_s[index] = self.endurance.endurance_time_s(load[index], region)
-        multiplier = np.where(load == 0, self._rest_multiplier.value, 1.0)
-        recovered = fatigue * np.exp(-multiplier * self._recovery_rate * dt_s)
-        return np.where(load > self._threshold.value, fatigue + dt_s / endurance_s, recovered)
+        return np.where(load > self._threshold.value, 1.0 / endurance_s, 0.0)
 
     def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
         """The fatigue ``F`` itself (``ht/mht`` of paper eq. 7 for a constant load), at most 1:
@@ -161,19 +177,40 @@ class HoldingTimeFatigue:
         return np.minimum(np.asarray(state, dtype=float), 1.0)
 
     def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
-        """The endurance model's time [s] above ``T_0``; ``inf`` at or below it, where
-        :meth:`step` accumulates no fatigue."""
+        """Time [s] from rest to F = 1 at each constant load [%MVC]: the endurance model's
+        time above ``T_0`` (``threshold``), or ``−ln(1 − 1/R_∞)/(r·R_j)`` where ``R_∞ > 1``
+        (``continuous``); ``inf`` where F never reaches 1."""
         load = np.asarray(load_pct_mvc, dtype=float)
         accumulates = load > self._threshold.value
         seconds = self.endurance.endurance_time_s(np.where(accumulates, load, 100.0), region)
-        return np.where(accumulates, seconds, np.inf)
+        if not self._continuous:
+            return np.where(accumulates, seconds, np.inf)
+        rate = _region_rates([region], "recovery_rate")[region].value
+        decay = rate * np.where(load == 0, self._rest_multiplier.value, 1.0)
+        settled = np.where(accumulates, 1.0 / (seconds * decay), 0.0)
+        reaches = settled > 1.0
+        ratio = np.where(reaches, 1.0 / np.where(reaches, settled, 2.0), 0.5)
+        return np.where(reaches, -np.log1p(-ratio) / decay, np.inf)
 
     def rule(self) -> str:
-        """``holding_time`` with its endurance model and ``T_0``."""
-        return (
-            f"holding_time, {self.endurance.name} endurance: unlimited at or below "
-            f"T_0 = {self._threshold.value:g} %MVC"
+        """The law, its endurance model and ``T_0``."""
+        text = (
+            f"{self.name} recovery law, {self.endurance.name} endurance: unlimited at or "
+            f"below T_0 = {self._threshold.value:g} %MVC"
         )
+        if self._continuous:
+            text += " and wherever recovery keeps pace (ET·R ≥ 1)"
+        return text
+
+    def settings(self) -> dict[str, object]:
+        """Law, endurance model, ``T_0``, rest multiplier and recovery rates."""
+        return {
+            "recovery_law": self.name,
+            "endurance_model": self.endurance.name,
+            "load_threshold_pct_mvc": self._threshold.value,
+            "rest_multiplier": self._rest_multiplier.value,
+            "recovery_rate_per_s": {k: p.value for k, p in self._recovery_rates.items()},
+        }
 
     def parameters(self) -> list[Parameter]:
         """Endurance model, ``T_0``, ``r_rest`` and ``R_j`` of the regions in use."""
@@ -353,7 +390,16 @@ class ThreeCompartmentFatigue:
                 strict=True,
             )
         )
-        return f"3cc_r: unlimited at or below the sustainable load ({levels} %MVC)"
+        return f"3cc_r recovery law: unlimited at or below the sustainable load ({levels} %MVC)"
+
+    def settings(self) -> dict[str, object]:
+        """The law, its rest multiplier and the fatigue and recovery rates per region."""
+        return {
+            "recovery_law": self.name,
+            "rest_multiplier": self._rest_multiplier.value,
+            "fatigue_rate_per_s": {k: p.value for k, p in self._fatigue_rates.items()},
+            "recovery_rate_per_s": {k: p.value for k, p in self._recovery_rates.items()},
+        }
 
     def parameters(self) -> list[Parameter]:
         """Gains, ``r_rest``, ``F`` and ``R`` of the regions in use, and the Euler substep."""
@@ -367,25 +413,32 @@ class ThreeCompartmentFatigue:
         ]
 
 
-def _holding_time(
-    regions: Sequence[str], endurance: EnduranceModel, recovery_threshold_pct_mvc: float | None
+def _threshold(
+    regions: Sequence[str], endurance: EnduranceModel, load_threshold_pct_mvc: float | None
+) -> FatigueModel:
+    return HoldingTimeFatigue(regions, endurance, recovery_threshold_pct_mvc=load_threshold_pct_mvc)
+
+
+def _continuous(
+    regions: Sequence[str], endurance: EnduranceModel, load_threshold_pct_mvc: float | None
 ) -> FatigueModel:
     return HoldingTimeFatigue(
-        regions, endurance, recovery_threshold_pct_mvc=recovery_threshold_pct_mvc
+        regions, endurance, recovery_threshold_pct_mvc=load_threshold_pct_mvc, continuous=True
     )
 
 
 def _three_compartment(
-    regions: Sequence[str], endurance: EnduranceModel, recovery_threshold_pct_mvc: float | None
+    regions: Sequence[str], endurance: EnduranceModel, load_threshold_pct_mvc: float | None
 ) -> FatigueModel:
-    if recovery_threshold_pct_mvc is not None:
-        expected = "no recovery threshold with the 3cc_r model (its recovery is built in)"
-        raise ProblemError(None, "recovery_threshold_pct_mvc", recovery_threshold_pct_mvc, expected)
+    if load_threshold_pct_mvc is not None:
+        expected = "no load threshold with the 3cc_r law (its recovery never stops)"
+        raise ProblemError(None, "load_threshold_pct_mvc", load_threshold_pct_mvc, expected)
     return ThreeCompartmentFatigue(regions)
 
 
-FATIGUE_MODELS: dict[str, Callable[[Sequence[str], EnduranceModel, float | None], FatigueModel]] = {
-    "holding_time": _holding_time,
+RECOVERY_LAWS: dict[str, Callable[[Sequence[str], EnduranceModel, float | None], FatigueModel]] = {
+    "threshold": _threshold,
+    "continuous": _continuous,
     "3cc_r": _three_compartment,
 }
 
@@ -397,12 +450,13 @@ def fatigue_model(
     endurance: EnduranceModel,
     recovery_threshold_pct_mvc: float | None = None,
 ) -> FatigueModel:
-    """The fatigue model called ``name`` (a key of ``FATIGUE_MODELS``) for these half-joints.
+    """The fatigue model of recovery law ``name`` (a key of ``RECOVERY_LAWS``).
 
-    ``regions[i]`` is the joint region of half-joint i. ``endurance`` drives ``holding_time``;
-    ``3cc_r`` has its own endurance (``ThreeCompartmentFatigue.endurance_time_s``) and ignores
-    it. ``recovery_threshold_pct_mvc`` overrides ``T_0`` of ``holding_time`` [%MVC].
+    ``regions[i]`` is the joint region of half-joint i. ``endurance`` drives ``threshold``
+    and ``continuous``; ``3cc_r`` has its own endurance
+    (``ThreeCompartmentFatigue.endurance_time_s``) and ignores it.
+    ``recovery_threshold_pct_mvc`` overrides ``T_0`` of the first two [%MVC].
     """
-    if name not in FATIGUE_MODELS:
-        raise ProblemError(None, "fatigue.model", name, f"one of {', '.join(FATIGUE_MODELS)}")
-    return FATIGUE_MODELS[name](regions, endurance, recovery_threshold_pct_mvc)
+    if name not in RECOVERY_LAWS:
+        raise ProblemError(None, "fatigue.recovery_law", name, f"one of {', '.join(RECOVERY_LAWS)}")
+    return RECOVERY_LAWS[name](regions, endurance, recovery_threshold_pct_mvc)

@@ -207,7 +207,7 @@ def resolve(spec: ProblemSpec, path: Path) -> Problem:
     regions = [h.region for h in body.half_joints]
     endurance = endurance_model(spec.fatigue.endurance)
     fatigue = fatigue_model(
-        spec.fatigue.model,
+        spec.fatigue.recovery_law,
         regions=regions,
         endurance=endurance,
         recovery_threshold_pct_mvc=spec.fatigue.load_threshold_pct_mvc,

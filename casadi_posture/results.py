@@ -70,7 +70,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "solver": result.solver,
         "strategy": settings.strategy,
         "r_min": settings.r_min,
-        "fatigue_model": problem.fatigue.name,
+        "recovery_law": problem.fatigue.settings(),
         "endurance_model": problem.spec.fatigue.endurance,
         "endurance_rule": rule(problem),
         "stop": result.stop,
@@ -209,7 +209,7 @@ def manifest(result: SimulationResult) -> dict[str, Any]:
         "python": platform.python_version(),
         "solver": result.solver,
         "solver_options": problem.spec.solver.model_dump(),
-        "fatigue_model": problem.fatigue.name,
+        "recovery_law": problem.fatigue.settings(),
         "endurance_rule": rule(problem),
         "constraint_settings": {
             **result.settings.__dict__,

@@ -274,7 +274,7 @@ Task = Annotated[
 
 class FatigueSpec(Strict):
     endurance: str = "manenica"
-    model: str = "holding_time"
+    recovery_law: Literal["threshold", "continuous", "3cc_r"] = "threshold"
     fatigue_threshold: Annotated[float, Field(gt=0, le=1)] = 0.8
     recovery_threshold: Annotated[float, Field(gt=0, le=1)] = 0.5
     strategy: Literal["active", "passive"] = "active"
@@ -292,9 +292,21 @@ class FatigueSpec(Strict):
                 "0 < recovery_threshold < fatigue_threshold <= 1, got recovery_threshold = "
                 f"{self.recovery_threshold:g} and fatigue_threshold = {self.fatigue_threshold:g}"
             )
-        if self.load_threshold_pct_mvc is not None and self.model != "holding_time":
-            raise ValueError("load_threshold_pct_mvc only with model = 'holding_time'")
+        if self.load_threshold_pct_mvc is not None and self.recovery_law == "3cc_r":
+            raise ValueError(
+                "load_threshold_pct_mvc only with recovery_law = 'threshold' or 'continuous'"
+            )
         return self
+
+    @model_validator(mode="before")
+    @classmethod
+    def _renamed(cls, data: object) -> object:
+        if isinstance(data, dict) and "model" in data:
+            raise ValueError(
+                "recovery_law = 'threshold', 'continuous' or '3cc_r' instead of model "
+                "(renamed: holding_time is threshold)"
+            )
+        return data
 
 
 class SimulationSpec(Strict):

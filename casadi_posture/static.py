@@ -6,7 +6,7 @@ simulation follows (feasibility, and one rule for "unlimited").
   so the endurance is 0 and the group is "over strength".
 - Otherwise the endurance is the fatigue model's time from rest to exhaustion at that
   constant load, ``inf`` where the model accumulates no fatigue (below ``T_0`` for
-  ``holding_time``, below the sustainable load for ``3cc_r``): the time the simulation of
+  ``threshold``, below the sustainable load for ``3cc_r``): the time the simulation of
   the same constant load would take to reach a fatigue level of 1.
 """
 
@@ -87,6 +87,20 @@ def limiting(groups: Sequence[GroupLoad]) -> GroupLoad | None:
     if not finite:
         return None
     return min(finite, key=lambda g: (g.endurance_s, -g.load_pct_mvc))
+
+
+def law(problem: Problem) -> str:
+    """The recovery law and its parameters, in one line."""
+    settings = problem.fatigue.settings()
+    parts = [str(settings["recovery_law"])]
+    if "load_threshold_pct_mvc" in settings:
+        parts.append(f"T_0 = {settings['load_threshold_pct_mvc']:g} %MVC")
+    rates = ", ".join(f"{k} {v:g}" for k, v in settings["recovery_rate_per_s"].items())
+    parts.append(f"R = {rates} 1/s (×{settings['rest_multiplier']:g} when unloaded)")
+    if "fatigue_rate_per_s" in settings:
+        fatigue = ", ".join(f"{k} {v:g}" for k, v in settings["fatigue_rate_per_s"].items())
+        parts.append(f"F = {fatigue} 1/s")
+    return "; ".join(parts)
 
 
 def rule(problem: Problem) -> str:

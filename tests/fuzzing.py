@@ -65,7 +65,7 @@ PLAUSIBLE = {
     ("tasks", 0, "target_m"): [[0.6, 0.0, 0.0], [0.1, 0.0, -0.2]],
     ("tasks", 0, "priority"): [1, 2, 3],
     ("tasks", 1, "priority"): [1, 2],
-    ("fatigue", "model"): ["3cc_r", "holding_time"],
+    ("fatigue", "recovery_law"): ["3cc_r", "threshold", "continuous"],
     ("fatigue", "endurance"): ["rohmert", "frey_law_avin", "manenica"],
     ("fatigue", "strategy"): ["passive", "active"],
     ("fatigue", "fatigue_threshold"): [1.0, 0.6],

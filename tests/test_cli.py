@@ -173,8 +173,8 @@ BAD_FILES = [
     ),
     (
         "unknown fatigue model",
-        GOOD.replace('model = "holding_time"', 'model = "magic"'),
-        "fatigue.model",
+        GOOD.replace('recovery_law = "threshold"', 'recovery_law = "magic"'),
+        "fatigue.recovery_law",
     ),
     (
         "unknown strategy",

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from casadi_posture.endurance import endurance_model
 from casadi_posture.errors import ProblemError
 from casadi_posture.fatigue import (
-    FATIGUE_MODELS,
+    RECOVERY_LAWS,
     HoldingTimeFatigue,
     ThreeCompartmentFatigue,
     fatigue_model,
@@ -24,7 +24,7 @@ R_ELBOW = 0.00094
 
 def holding(regions: list[str], endurance: str = "manenica", **kwargs: float) -> HoldingTimeFatigue:
     model = fatigue_model(
-        "holding_time", regions=regions, endurance=endurance_model(endurance), **kwargs
+        "threshold", regions=regions, endurance=endurance_model(endurance), **kwargs
     )
     assert isinstance(model, HoldingTimeFatigue)
     return model
@@ -94,7 +94,7 @@ def test_user_threshold_moves_the_switch() -> None:
     lowered = holding(["shoulder"], recovery_threshold_pct_mvc=5.0)
     assert default.step(np.array([0.5]), np.array([10.0]), 1.0)[0] < 0.5
     assert lowered.step(np.array([0.5]), np.array([10.0]), 1.0)[0] > 0.5
-    threshold = next(p for p in lowered.parameters() if p.name.endswith("recovery_threshold"))
+    threshold = next(p for p in lowered.parameters() if p.name.endswith("load_threshold"))
     assert (threshold.value, threshold.status) == (5.0, "user")
 
 
@@ -106,7 +106,7 @@ def test_holding_time_parameters_name_what_is_used() -> None:
         "endurance.frey_law_avin.shoulder.b1",
         "endurance.frey_law_avin.elbow.b0",
         "endurance.frey_law_avin.elbow.b1",
-        "fatigue.holding_time.recovery_threshold",
+        "fatigue.load_threshold",
         "fatigue.rest_multiplier",
         "fatigue.frey_law_2012.shoulder.recovery_rate",
         "fatigue.frey_law_2012.elbow.recovery_rate",
@@ -127,13 +127,13 @@ def test_negative_time_step_is_a_problem_error() -> None:
 
 
 def test_unknown_fatigue_model_names_value_and_allowed_names() -> None:
-    with pytest.raises(ProblemError, match=r"fatigue\.model = 'nope'") as error:
+    with pytest.raises(ProblemError, match=r"fatigue\.recovery_law = 'nope'") as error:
         fatigue_model("nope", regions=["elbow"], endurance=endurance_model("manenica"))
-    assert "one of holding_time, 3cc_r" in str(error.value)
+    assert "one of threshold, continuous, 3cc_r" in str(error.value)
 
 
 def test_3cc_r_refuses_a_recovery_threshold() -> None:
-    with pytest.raises(ProblemError, match="recovery_threshold_pct_mvc"):
+    with pytest.raises(ProblemError, match="load_threshold_pct_mvc"):
         fatigue_model(
             "3cc_r",
             regions=["elbow"],
@@ -144,7 +144,7 @@ def test_3cc_r_refuses_a_recovery_threshold() -> None:
 
 def test_registry_builds_each_model_by_name() -> None:
     manenica = endurance_model("manenica")
-    for name in FATIGUE_MODELS:
+    for name in RECOVERY_LAWS:
         assert fatigue_model(name, regions=["elbow"], endurance=manenica).name == name
 
 
@@ -271,3 +271,59 @@ def test_3cc_parameters_name_what_is_used() -> None:
         "fatigue.frey_law_2012.elbow.recovery_rate": R_ELBOW,
         "fatigue.numerics.max_substep": 0.01,
     }
+
+
+# The recovery laws side by side: recovery from 0.8 to 0.5 (the hysteresis thresholds).
+
+
+def _time_to(model, state: np.ndarray, load: float, level: float, dt: float = 0.05) -> float:
+    """Time [s] until the fatigue level falls to ``level`` under a constant load."""
+    t = 0.0
+    while model.level(state, np.array([load]))[0] > level:
+        state = model.step(state, np.array([load]), dt)
+        t += dt
+        assert t < 5000
+    return t
+
+
+@pytest.mark.parametrize("law", ["threshold", "continuous"])
+@pytest.mark.parametrize(("load", "multiplier"), [(0.0, 15.0), (10.0, 1.0)])
+def test_recovery_from_0_8_to_0_5_has_the_closed_form(law: str, load: float, multiplier: float):
+    """At or below T_0 both laws decay as dF/dt = -r·R·F: ln(0.8/0.5)/(r·R), with r = 15
+    unloaded (18.65 s at the shoulder) and 1 at 10 %MVC (280 s)."""
+    model = fatigue_model(law, regions=["shoulder"], endurance=endurance_model("manenica"))
+    took = _time_to(model, np.array([0.8]), load, 0.5)
+    assert took == pytest.approx(math.log(1.6) / (multiplier * R_SHOULDER), abs=0.05)
+
+
+def test_the_continuous_law_recovers_under_load_and_settles() -> None:
+    """dF/dt = 1/ET - R·F above T_0: F(t) = F∞ + (F0 - F∞)·exp(-R·t) with F∞ = 1/(ET·R),
+    whatever the steps. At 20 %MVC the elbow's F∞ = 2.9 > 1, so it still tires, but reaches
+    F = 1 after -ln(1 - 1/F∞)/R = 452 s instead of the threshold law's ET = 368 s."""
+    model = fatigue_model("continuous", regions=["elbow"], endurance=endurance_model("manenica"))
+    et = 60 * math.exp(2.70 - 0.0448 * 20.0)
+    settled = 1.0 / (et * R_ELBOW)
+    state = np.array([0.3])
+    for dt in [0.7, 3.0, 11.0, 0.1, 40.0]:
+        state = model.step(state, np.array([20.0]), dt)
+    t = 0.7 + 3.0 + 11.0 + 0.1 + 40.0
+    assert state[0] == pytest.approx(settled + (0.3 - settled) * math.exp(-R_ELBOW * t), rel=1e-12)
+    exhausted = float(model.endurance_time_s(20.0, "elbow"))
+    assert exhausted == pytest.approx(-math.log(1 - 1 / settled) / R_ELBOW, rel=1e-12)
+    assert exhausted > et  # slower than the threshold law, which takes exactly ET
+
+
+def test_the_3cc_r_law_recovers_unloaded_but_not_at_10_pct_mvc() -> None:
+    """3CC-r: unloaded, MF decays at r·R (15 × 0.00168 /s at the shoulder): 0.8 -> 0.5 in about
+    ln(1.6)/(15·R) = 18.65 s. At 10 %MVC, above the shoulder's sustainable 8.5 %MVC, the level
+    keeps rising: no recovery at all."""
+    model = fatigue_model("3cc_r", regions=["shoulder"], endurance=endurance_model("manenica"))
+    rested = np.array([[0.0, 20.0, 80.0]])
+    assert _time_to(model, rested, 0.0, 0.5, dt=0.01) == pytest.approx(
+        math.log(1.6) / (15 * R_SHOULDER), rel=0.01
+    )
+    state = np.array([[10.0, 10.0, 80.0]])
+    before = model.level(state, np.array([10.0]))[0]
+    for _ in range(600):
+        state = model.step(state, np.array([10.0]), 1.0)
+    assert model.level(state, np.array([10.0]))[0] > before

@@ -201,12 +201,12 @@ def test_a_hanging_arm_never_tires() -> None:
     assert {g["verdict"] for g in tiny} == {"unlimited"}
 
 
-@pytest.mark.parametrize("model", ["holding_time", "3cc_r"])
+@pytest.mark.parametrize("model", ["threshold", "continuous", "3cc_r"])
 def test_static_endurance_is_the_simulated_time_to_exhaustion(model: str) -> None:
     """With the fatigue threshold at 1 the constraint never moves the arm: the simulated hold
     is a constant load, and it must end when the static endurance says."""
     overrides = {
-        "fatigue.model": model,
+        "fatigue.recovery_law": model,
         "fatigue.fatigue_threshold": 1.0,
         "simulation.duration_s": 900.0,
     }

@@ -158,7 +158,7 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
             {
                 "problem": problem,
                 "endurance_model": resolved.spec.fatigue.endurance,
-                "fatigue_model": resolved.fatigue.name,
+                "recovery_law": resolved.fatigue.name,
                 "endurance_rule": rule(resolved),
                 "feasible": over is None,
                 "flags": [over] if over else [],

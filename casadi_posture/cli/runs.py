@@ -11,6 +11,7 @@ import click
 
 from .. import interrupt
 from ..report import table
+from ..static import law
 from ..whatif import MAX_CASES
 from .common import INTERRUPTED, SOLVER_OPTION, batch_options, main, problem_from
 
@@ -87,6 +88,7 @@ def simulate(
         f"wall, {100 * (1 - stats['share_outside_ik']):.0f} % in IK, "
         f"{stats['ik_fallbacks']} steps by the other solver, {stats['ik_failures']} IK failures"
     )
+    click.echo(f"recovery law: {law(resolved)}")
     click.echo(f"endurance rule: {report['endurance_rule']}\n")
     click.echo(
         table(
@@ -354,6 +356,8 @@ def whatif(
             ]
         rows.append([*line, row["flags"] or "-"])
     right = {headers.index(h) for h in ("task held (s)",) if h in headers}
+    if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
+        click.echo(f"recovery law: {law(problem_from(problem))}\n")
     click.echo(table(headers, rows, digits=2, right=right))
     figures = plot_outcomes(report.rows, parsed, out, simulate=not static)
     click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(figures)} in {out}")
