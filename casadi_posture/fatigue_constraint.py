@@ -12,6 +12,14 @@ the goal Δq shrinks and its direction is no longer meaningful (the α term take
 over); below ``HOLD_FRACTION`` of Δq_max the last direction is kept, with
 b = aᵀ(q + Δq), so lower tasks cannot pull the posture back before the owner
 recovers.
+
+The compatible constraint (our extension; ``keep_levels = N``): in the paper's
+experiment the subjects rest while keeping the wrist on the line, but the constraint,
+above every task, may break it. With N > 0, Δq is first projected onto the nullspace of
+the Jacobians of priority levels 1..N at the current posture (joints at a limit held),
+so the constraint moves the posture only in directions the kept tasks allow. When the
+projection leaves less than ``BLOCKED_FRACTION`` of the owner's step, the goal cannot be
+reached while the kept tasks hold: the constraint is blocked (an event).
 """
 
 from __future__ import annotations
@@ -23,13 +31,20 @@ from typing import Literal
 import numpy as np
 
 from .body import BodyModel
-from .hierarchy import Inequality
+from .hierarchy import Inequality, TaskHierarchy
+from .ik import ACTIVE_TOLERANCE
 from .passive import PassiveTorque
 from .reduced_torque import Goal, JointState, Strategy, goal_angle
 from .torques import Torques
 
 #: Steps shorter than this fraction of Δq_max keep the previous hyperplane direction.
 HOLD_FRACTION = 0.05
+
+#: A projected owner step below this fraction of the unprojected one is blocked.
+BLOCKED_FRACTION = 0.1
+
+#: Singular values of the kept levels' Jacobian below this (relative) are no direction.
+RANK_TOLERANCE = 1e-9
 
 EventKind = Literal[
     "fatigue_threshold",
@@ -40,6 +55,7 @@ EventKind = Literal[
     "over_strength",
     "exhausted",
     "solver_fallback",
+    "constraint_blocked",
     "interrupted",
 ]
 
@@ -47,7 +63,7 @@ EventKind = Literal[
 @dataclass(frozen=True)
 class ConstraintSettings:
     """Thresholds (fatigue levels), strategy, R_min, ε_τ [N·m], β, Δq_max [rad], α
-    [rad/(N·m)²] of the fatigue-reducing constraint."""
+    [rad/(N·m)²] of the fatigue-reducing constraint, and the priority levels it keeps."""
 
     fatigue_threshold: float = 0.8
     recovery_threshold: float = 0.5
@@ -57,6 +73,7 @@ class ConstraintSettings:
     beta: float = 0.5
     max_step: float = math.radians(1.0)
     alpha: float = -1e-4
+    keep_levels: int = 0
 
 
 @dataclass(frozen=True)
@@ -76,8 +93,10 @@ class FatigueConstraint:
     body: BodyModel
     passive: dict[str, PassiveTorque]
     settings: ConstraintSettings
+    hierarchy: TaskHierarchy | None = None
     fatigued: np.ndarray = field(init=False)
     owner: int | None = field(init=False, default=None)
+    blocked: bool = field(init=False, default=False)
     _crossed_at: np.ndarray = field(init=False)
     _direction: np.ndarray | None = field(init=False, default=None)
 
@@ -98,7 +117,7 @@ class FatigueConstraint:
             events.append(Event(time_s, "recovery_threshold", names[k], f"fatigue {levels[k]:.3f}"))
         if self.owner is not None and not self.fatigued[self.owner]:
             events.append(Event(time_s, "constraint_off", names[self.owner]))
-            self.owner, self._direction = None, None
+            self.owner, self._direction, self.blocked = None, None, False
         if self.owner is None and self.fatigued.any():
             self.owner = int(np.argmin(self._crossed_at))
             events.append(
@@ -131,9 +150,33 @@ class FatigueConstraint:
         goal = goal_angle(joint, s.strategy, r_min=s.r_min, epsilon=s.epsilon)
         dq = s.alpha * 2.0 * torques.external[j] * torques.external_jacobian[j]
         dq[j] = np.clip(s.beta * (goal.angle - q[j]), -s.max_step, s.max_step)
+        if s.keep_levels > 0:
+            owner_step = abs(dq[j])
+            dq = self._kept(q) @ dq
+            self.blocked = owner_step > 0 and abs(dq[j]) < BLOCKED_FRACTION * owner_step
         norm = float(np.linalg.norm(dq))
         if norm >= HOLD_FRACTION * s.max_step:
             self._direction = -dq / norm
         elif self._direction is None:
             return None
         return Inequality(self._direction, float(self._direction @ (q + dq))), goal
+
+    def _kept(self, q: np.ndarray) -> np.ndarray:
+        """Projector onto the joint motions that leave levels 1..keep_levels unchanged to first
+        order, joints at a limit held."""
+        h = self.hierarchy
+        if h is None:
+            raise ValueError("keep_levels needs the task hierarchy")
+        free = np.array(
+            [
+                d.lower + ACTIVE_TOLERANCE < q[i] < d.upper - ACTIVE_TOLERANCE
+                for i, d in enumerate(self.body.dofs)
+            ],
+            dtype=float,
+        )
+        values = h.function(q, h.targets)
+        kept = min(self.settings.keep_levels, h.depth)
+        jacobian = np.vstack([np.asarray(values[h.depth + k]) for k in range(kept)]) * free
+        _, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
+        rows = vt[sigma > RANK_TOLERANCE * max(1.0, float(sigma.max(initial=0.0)))]
+        return np.diag(free) - rows.T @ rows

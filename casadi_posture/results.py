@@ -99,6 +99,8 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "recovery_postures": _recoveries(result),
         "task_not_held_events": sum(e.kind == "task_not_held" for e in result.events),
         "over_strength_events": sum(e.kind == "over_strength" for e in result.events),
+        "constraint_blocked_events": sum(e.kind == "constraint_blocked" for e in result.events),
+        "keep_levels": result.settings.keep_levels,
         "flags": flags(result),
         "solver_statistics": {
             "steps": int(tl.time.size),

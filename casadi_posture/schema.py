@@ -284,6 +284,7 @@ class FatigueSpec(Strict):
     beta: Annotated[float, Field(gt=0, lt=1)] = 0.5
     max_step_deg: Annotated[float, Field(gt=0, le=30)] = 1.0
     alpha_rad_per_Nm2: Annotated[float, Field(ge=-1e-2, lt=0)] = -1e-4
+    keep_levels: Annotated[int, Field(ge=0, le=1000)] = 0
 
     @model_validator(mode="after")
     def _thresholds(self) -> FatigueSpec:

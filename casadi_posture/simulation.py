@@ -94,6 +94,7 @@ def constraint_settings(problem: Problem) -> ConstraintSettings:
         beta=f.beta,
         max_step=math.radians(f.max_step_deg),
         alpha=f.alpha_rad_per_Nm2,
+        keep_levels=f.keep_levels,
     )
 
 
@@ -153,7 +154,14 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
     torque_model = problem.torque_model()
     fatigue = problem.fatigue
     settings = constraint_settings(problem)
-    constraint = FatigueConstraint(body, problem.passive, settings)
+    if settings.keep_levels > hierarchy.depth:
+        raise ProblemError(
+            problem.path,
+            "fatigue.keep_levels",
+            settings.keep_levels,
+            f"at most the number of priority levels ({hierarchy.depth})",
+        )
+    constraint = FatigueConstraint(body, problem.passive, settings, hierarchy)
     effector, line = _tracked(hierarchy)
     position = ca.Function("effector", [body.q], [body.landmark(effector)])
     names = [h.name for h in body.half_joints]
@@ -171,8 +179,18 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
             events.append(Event(now, "interrupted", "", "Ctrl-C: the run stopped here"))
             stop = "interrupted"
             break
+        was_blocked = constraint.blocked
         planned = constraint.hyperplane(q, torques) if torques is not None else None
         inequality, goal = planned if planned is not None else (None, None)
+        if constraint.blocked and not was_blocked and constraint.owner is not None:
+            events.append(
+                Event(
+                    now,
+                    "constraint_blocked",
+                    names[constraint.owner],
+                    "the goal is not reachable while the kept levels hold",
+                )
+            )
         tic = time.perf_counter()
         result = solvers.primary.solve(q, inequality)
         iterations += result.iterations

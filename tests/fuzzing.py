@@ -75,6 +75,7 @@ PLAUSIBLE = {
     ("fatigue", "alpha_rad_per_Nm2"): [-1e-2, -1e-9],
     ("fatigue", "max_step_deg"): [30.0, 0.01],
     ("fatigue", "load_threshold_pct_mvc"): [0.0, 100.0],
+    ("fatigue", "keep_levels"): [1, 2, 5],
     ("simulation", "time_step_s"): [0.5, 5.0, 60.0],
     ("solver", "name"): ["nullspace", "lexicographic"],
     ("solver", "max_iterations"): [1, 3, 100000],
