@@ -113,3 +113,39 @@ def test_parameters_carry_units_and_status() -> None:
     assert frey[0].evidence == "C2"
     rohmert = endurance_model("rohmert").parameters([])
     assert {p.status for p in rohmert} == {"estimate"}
+
+
+def test_the_docs_table_of_endurance_against_data_is_what_the_models_give() -> None:
+    """docs/endurance.md: every model's endurance at 20-90 %MVC against Frey-Law & Avin 2010,
+    recomputed (and the README's claims: Manenica +36 to +80 % at the shoulder between 30
+    and 70 %MVC, -42 % at the elbow at 20 %MVC)."""
+    from pathlib import Path
+
+    from casadi_posture.fatigue import ThreeCompartmentFatigue
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "endurance.md").read_text()
+    rows = [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in text.splitlines()
+        if line.startswith("| shoulder") or line.startswith("| elbow")
+    ]
+    assert len(rows) == 10
+    reference = endurance_model("frey_law_avin")
+    for region, load, data, *models in rows:
+        f_load = float(load)
+        ref = float(reference.endurance_time_s(f_load, region))
+        assert float(data) == pytest.approx(ref, abs=0.5)
+        computed = [
+            float(endurance_model("manenica").endurance_time_s(f_load, region)),
+            float(endurance_model("rohmert").endurance_time_s(f_load, region)),
+            float(ThreeCompartmentFatigue([region]).endurance_time_s(f_load, region)),
+        ]
+        pairs = zip(models[::2], models[1::2], strict=True)
+        for (seconds, relative), value in zip(pairs, computed, strict=True):
+            assert float(seconds) == pytest.approx(value, abs=0.5)
+            assert float(relative.removesuffix(" %")) == pytest.approx(
+                100 * (value / ref - 1), abs=0.5
+            )
+    manenica = {(r[0], r[1]): float(r[4].removesuffix(" %")) for r in rows}
+    assert [manenica["shoulder", load] for load in ("30", "50", "70")] == [73, 80, 36]
+    assert manenica["elbow", "20"] == -42

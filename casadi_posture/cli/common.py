@@ -76,6 +76,11 @@ def main() -> None:
 
     Angles are in degrees, torques in N·m, lengths in m, times in s or min as
     each column header says. Bad input exits with code 2 and one line on stderr.
+
+    Endurance is Manenica's, the paper's model, by default: for fidelity to the paper,
+    not for accuracy (it is 36-80 % long at the shoulder between 30 and 70 %MVC);
+    fatigue.endurance = "frey_law_avin" follows the Frey-Law & Avin 2010 meta-analysis
+    (docs/endurance.md).
     """
 
 
