@@ -291,8 +291,13 @@ def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dic
     for group in report["half_joints"]:
         row[f"fatigue_threshold_{group['half_joint']}_s"] = group["first_fatigue_threshold_s"]
     recoveries = report["recovery_postures"]
+    recovery = recoveries[0] if recoveries else None
+    row["recovery_s"] = recovery["time_s"] if recovery else None
     for dof in problem.body.dof_names:
-        row[f"recovery_{dof}_deg"] = recoveries[0]["posture_deg"][dof] if recoveries else None
+        row[f"recovery_{dof}_deg"] = recovery["posture_deg"][dof] if recovery else None
+    position = recovery["effector_m"] if recovery else [None] * 3
+    for axis, value in zip("xyz", position, strict=True):
+        row[f"recovery_{result.effector}_{axis}_m"] = value
     return row, files
 
 

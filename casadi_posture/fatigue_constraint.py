@@ -8,10 +8,13 @@ While half-joint ``l`` owns the constraint, each step:
     a = -Δq/‖Δq‖,  b = aᵀ(q + Δq)                      (paper eqs 9-11)
 
 The current posture violates aᵀq ≤ b by ‖Δq‖; the IK solvers move it across. Near
-the goal Δq shrinks and its direction is no longer meaningful (the α term takes
-over); below ``HOLD_FRACTION`` of Δq_max the last direction is kept, with
-b = aᵀ(q + Δq), so lower tasks cannot pull the posture back before the owner
-recovers.
+the goal the owner's step shrinks and the direction of Δq is no longer meaningful (the α
+term takes over); once the owner's step is below ``HOLD_FRACTION`` of Δq_max the plane is
+held: the last direction, through the current posture moved by the owner's step alone,
+so neither lower tasks nor the α term move the owner back before it recovers (with the α
+term's direction instead, the owner sprang back from its goal to the lower task's posture
+and out again; with the α term in the offset, the plane drifted a little every step and
+took the top task with it).
 
 The compatible constraint (our extension; ``keep_levels = N``): in the paper's
 experiment the subjects rest while keeping the wrist on the line, but the constraint,
@@ -155,11 +158,14 @@ class FatigueConstraint:
             dq = self._kept(q) @ dq
             self.blocked = owner_step > 0 and abs(dq[j]) < BLOCKED_FRACTION * owner_step
         norm = float(np.linalg.norm(dq))
-        if norm >= HOLD_FRACTION * s.max_step:
+        if abs(dq[j]) >= HOLD_FRACTION * s.max_step and norm > 0:
             self._direction = -dq / norm
-        elif self._direction is None:
+            return Inequality(self._direction, float(self._direction @ (q + dq))), goal
+        if self._direction is None:
             return None
-        return Inequality(self._direction, float(self._direction @ (q + dq))), goal
+        held = np.zeros_like(dq)
+        held[j] = dq[j]
+        return Inequality(self._direction, float(self._direction @ (q + held))), goal
 
     def _kept(self, q: np.ndarray) -> np.ndarray:
         """Projector onto the joint motions that leave levels 1..keep_levels unchanged to first
