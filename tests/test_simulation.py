@@ -313,3 +313,16 @@ def test_keep_levels_beyond_the_hierarchy_is_refused(tmp_path: Path) -> None:
     )
     result = CliRunner().invoke(main, ["simulate", str(path), "--out", str(tmp_path / "o")])
     assert result.exit_code == 2 and "fatigue.keep_levels = 3" in result.stderr
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted(p for p in PROBLEMS.glob("*.toml") if "[[tasks]]" in p.read_text()),
+    ids=lambda p: p.stem,
+)
+def test_no_shipped_scenario_holds_a_load_above_strength(path: Path) -> None:
+    """With the realistic passive torques no shipped scenario drives a group past 100 %MVC
+    (the Gymnast-fit elbow curve drove the elbow flexors to 125 %MVC on the -45° line)."""
+    result = simulate(load_problem(path), "nullspace")
+    assert not [e for e in result.events if e.kind == "over_strength"]
+    assert result.timeline.load.max() <= 100.0
