@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from fuzzing import Case, Outcome, cases, run_case
 from hypothesis import HealthCheck, given, seed, settings
 
-from casadi_posture.report import table
+from casadi_posture.output.report import table
 
 
 def campaign(examples: int, chosen_seed: int) -> list[tuple[Case, Outcome]]:

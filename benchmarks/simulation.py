@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from casadi_posture.output.report import table
 from casadi_posture.problem import load_problem
-from casadi_posture.report import table
 from casadi_posture.simulation import simulate
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

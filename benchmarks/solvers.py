@@ -24,11 +24,11 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from casadi_posture.hierarchy import Inequality
-from casadi_posture.lexicographic import LexicographicSolver
-from casadi_posture.nullspace import NullspaceSolver
+from casadi_posture.ik.hierarchy import Inequality
+from casadi_posture.ik.lexicographic import LexicographicSolver
+from casadi_posture.ik.nullspace import NullspaceSolver
+from casadi_posture.output.report import table
 from casadi_posture.problem import load_problem
-from casadi_posture.report import table
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 

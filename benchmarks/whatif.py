@@ -12,9 +12,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from casadi_posture.batch import run_batch
-from casadi_posture.report import table
-from casadi_posture.whatif import grid
+from casadi_posture.output.report import table
+from casadi_posture.runs.batch import run_batch
+from casadi_posture.runs.whatif import grid
 
 PROBLEM = str(Path(__file__).resolve().parents[1] / "problems" / "holding_m45.toml")
 VARIES = [

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import sys
 
-from .interrupt import EXIT_CODE
+from casadi_posture.interrupt import EXIT_CODE
 
 
 def main() -> None:
     try:
-        from .cli import main as commands
+        from casadi_posture.cli import main as commands
 
         commands()
     except KeyboardInterrupt:

@@ -8,7 +8,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .problem import Problem
+from casadi_posture.problem import Problem
 
 
 def _zero_posture(problem: Problem, expression: ca.SX) -> list[float]:

@@ -14,25 +14,33 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
-from . import parameters
-from .anthropometry import SegmentInertia, segment_inertia
-from .body import BodyModel
-from .endurance import endurance_model
-from .errors import MISSING, ProblemError
-from .fatigue import FatigueModel, fatigue_model
-from .hierarchy import TaskHierarchy
-from .loads import Load
-from .models import MODELS
-from .overrides import apply
-from .parameters import Parameter
-from .passive import (
+from casadi_posture.biomech.endurance import endurance_model
+from casadi_posture.biomech.fatigue import FatigueModel, fatigue_model
+from casadi_posture.biomech.passive import (
     ExponentialPassive,
     NoPassive,
     PassiveTorque,
     ReshapedPassive,
     limit_torque,
 )
-from .schema import (
+from casadi_posture.biomech.strength import (
+    ConstantStrength,
+    Strength,
+    TabulatedStrength,
+    default_strength,
+)
+from casadi_posture.biomech.torques import TorqueModel
+from casadi_posture.body.anthropometry import SegmentInertia, segment_inertia
+from casadi_posture.body.loads import Load
+from casadi_posture.body.models import MODELS
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.data import parameters
+from casadi_posture.data.parameters import Parameter
+from casadi_posture.errors import MISSING, ProblemError
+from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.tasks import tasks_from_specs
+from casadi_posture.spec.overrides import apply
+from casadi_posture.spec.schema import (
     ComTask,
     DofSpec,
     ExponentialPassiveSpec,
@@ -44,9 +52,6 @@ from .schema import (
     Task,
     passive_model_tag,
 )
-from .strength import ConstantStrength, Strength, TabulatedStrength, default_strength
-from .tasks import tasks_from_specs
-from .torques import TorqueModel
 
 
 @dataclass(frozen=True)

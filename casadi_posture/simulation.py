@@ -18,15 +18,15 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
-from . import interrupt
-from .errors import ProblemError
-from .fatigue_constraint import ConstraintSettings, Event, FatigueConstraint
-from .hierarchy import TaskHierarchy
-from .ik import ACHIEVED_TOLERANCE
-from .problem import Problem
-from .solvers import SOLVER_NAMES, Solver, make_solver
-from .static import STRENGTH_PCT_MVC
-from .tasks import Line, Task
+from casadi_posture import interrupt
+from casadi_posture.adjustment.constraint import ConstraintSettings, Event, FatigueConstraint
+from casadi_posture.errors import ProblemError
+from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.ik.solvers import SOLVER_NAMES, Solver, make_solver
+from casadi_posture.ik.tasks import Line, Task
+from casadi_posture.problem import Problem
+from casadi_posture.static import STRENGTH_PCT_MVC
 
 #: Why a run ended: it ran its duration, a group was exhausted (or needed more than its
 #: strength), the top task could not be achieved at the start, or Ctrl-C.

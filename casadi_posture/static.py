@@ -17,8 +17,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-from .problem import Problem
-from .torques import Torques
+from casadi_posture.biomech.torques import Torques
+from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
 STRENGTH_PCT_MVC = 100.0

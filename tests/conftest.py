@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from casadi_posture.body import BodyModel, Dof, Landmark, Segment
+from casadi_posture.body.tree import BodyModel, Dof, Landmark, Segment
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from casadi_posture.anthropometry import SEGMENTS, reference_body, segment_inertia
+from casadi_posture.body.anthropometry import SEGMENTS, reference_body, segment_inertia
 from casadi_posture.errors import ProblemError
 
 

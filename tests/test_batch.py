@@ -90,7 +90,7 @@ def test_a_killed_batch_resumes_without_redoing_or_losing_cases(tmp_path: Path) 
     command = [
         sys.executable,
         "-m",
-        "casadi_posture.cli",
+        "casadi_posture",
         "batch",
         str(folder),
         "--out",
@@ -256,7 +256,7 @@ def test_a_dask_cluster_gives_the_local_summary(tmp_path: Path) -> None:
 
 def test_a_case_runs_from_its_text_where_the_file_does_not_exist() -> None:
     """What a remote worker sees: the problem's text, and a path that means nothing there."""
-    from casadi_posture.batch import Case, run_case
+    from casadi_posture.runs.batch import Case, run_case
 
     text = HOLD.replace("duration_s = 1800.0", "duration_s = 20.0")
     outcome = run_case(
@@ -272,7 +272,7 @@ def test_a_case_runs_from_its_text_where_the_file_does_not_exist() -> None:
 def test_simulated_and_static_cases_agree_on_the_start_posture() -> None:
     """A simulated case reads its start outcomes from the simulation's first step; they must
     be what the static path computes from the torques at the solved start posture."""
-    from casadi_posture.batch import Case, run_case
+    from casadi_posture.runs.batch import Case, run_case
 
     text = HOLD.replace("duration_s = 1800.0", "duration_s = 5.0")
     simulated = run_case(Case("s", "holding.toml", {}, "nullspace", True, text)).row

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import PROBLEMS, chain_3d
 
-from casadi_posture.body import BodyModel, Dof
+from casadi_posture.body.tree import BodyModel, Dof
 from casadi_posture.errors import ProblemError
 from casadi_posture.problem import load_problem
 

@@ -249,7 +249,7 @@ def test_console_script_exit_code_and_no_traceback(tmp_path: Path) -> None:
     path = tmp_path / "bad.toml"
     path.write_text(GOOD.replace("mass_kg = 2.5", "mass_kg = -1.0"))
     done = subprocess.run(
-        [sys.executable, "-m", "casadi_posture.cli", "validate", str(path)],
+        [sys.executable, "-m", "casadi_posture", "validate", str(path)],
         capture_output=True,
         text=True,
         check=False,

@@ -11,8 +11,8 @@ from click.testing import CliRunner
 from conftest import PROBLEMS
 
 from casadi_posture.cli import main
-from casadi_posture.compare import compare
 from casadi_posture.problem import load_problem
+from casadi_posture.runs.compare import compare
 
 WITH_TASKS = [p for p in sorted(PROBLEMS.glob("*.toml")) if load_problem(p).tasks]
 

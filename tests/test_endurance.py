@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from casadi_posture.endurance import (
+from casadi_posture.biomech.endurance import (
     ENDURANCE_MODELS,
     FreyLawAvin,
     Manenica,
@@ -121,7 +121,7 @@ def test_the_docs_table_of_endurance_against_data_is_what_the_models_give() -> N
     and 70 %MVC, -42 % at the elbow at 20 %MVC)."""
     from pathlib import Path
 
-    from casadi_posture.fatigue import ThreeCompartmentFatigue
+    from casadi_posture.biomech.fatigue import ThreeCompartmentFatigue
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "endurance.md").read_text()
     rows = [

@@ -9,14 +9,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from casadi_posture.endurance import endurance_model
-from casadi_posture.errors import ProblemError
-from casadi_posture.fatigue import (
+from casadi_posture.biomech.endurance import endurance_model
+from casadi_posture.biomech.fatigue import (
     RECOVERY_LAWS,
     HoldingTimeFatigue,
     ThreeCompartmentFatigue,
     fatigue_model,
 )
+from casadi_posture.errors import ProblemError
 
 R_SHOULDER = 0.00168
 R_ELBOW = 0.00094

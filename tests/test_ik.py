@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from conftest import PROBLEMS, chain_3d
 
-from casadi_posture.hierarchy import Inequality, TaskHierarchy
-from casadi_posture.lexicographic import LexicographicOptions, LexicographicSolver
-from casadi_posture.nullspace import NullspaceOptions, NullspaceSolver
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.lexicographic import LexicographicOptions, LexicographicSolver
+from casadi_posture.ik.nullspace import NullspaceOptions, NullspaceSolver
+from casadi_posture.ik.tasks import JointReference, Line, Plane, Position
 from casadi_posture.problem import load_problem
-from casadi_posture.tasks import JointReference, Line, Plane, Position
 
 SOLVERS = [NullspaceSolver, LexicographicSolver]
 START = np.radians([40.0, 30.0])

@@ -8,8 +8,8 @@ import pytest
 from conftest import PROBLEMS
 
 from casadi_posture.errors import ProblemError
-from casadi_posture.overrides import apply, parse_key, parse_value
 from casadi_posture.problem import load_problem
+from casadi_posture.spec.overrides import apply, parse_key, parse_value
 
 
 def test_keys_and_values_parse() -> None:

@@ -6,7 +6,7 @@ from importlib import resources
 
 import pytest
 
-from casadi_posture import parameters
+from casadi_posture.data import parameters
 
 STEMS = sorted(
     p.name.removesuffix(".toml")

@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from casadi_posture.reduced_torque import JointState, dichotomy, goal_angle, slope_angles
+from casadi_posture.adjustment.reduced_torque import JointState, dichotomy, goal_angle, slope_angles
 
 LOWER, UPPER = -0.2, 2.6
 EPS = 0.05

@@ -12,8 +12,8 @@ import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
 
+from casadi_posture.adjustment.constraint import ConstraintSettings, FatigueConstraint
 from casadi_posture.cli import main
-from casadi_posture.fatigue_constraint import ConstraintSettings, FatigueConstraint
 from casadi_posture.problem import load_problem
 from casadi_posture.simulation import constraint_settings, simulate
 

@@ -30,7 +30,7 @@ def run(*args: object):
 
 
 def _command(*args: object) -> list[str]:
-    return [sys.executable, "-m", "casadi_posture.cli", *map(str, args)]
+    return [sys.executable, "-m", "casadi_posture", *map(str, args)]
 
 
 def _ctrl_c(process: subprocess.Popen) -> tuple[int, float, str]:

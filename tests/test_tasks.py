@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 from conftest import PROBLEMS, chain_3d
 
-from casadi_posture.body import BodyModel
-from casadi_posture.hierarchy import TaskHierarchy
-from casadi_posture.problem import load_problem
-from casadi_posture.tasks import (
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.tasks import (
     CentreOfMass,
     JointReference,
     Line,
@@ -22,6 +21,7 @@ from casadi_posture.tasks import (
     Task,
     rotation_rpy,
 )
+from casadi_posture.problem import load_problem
 
 
 def _all_tasks(body: BodyModel, effector: str, segment_dof: str) -> list[Task]:

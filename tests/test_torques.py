@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from conftest import PROBLEMS, chain_3d
 
-from casadi_posture.curve import torque_curve
-from casadi_posture.loads import Load, pack
-from casadi_posture.passive import ExponentialPassive, NoPassive, ReshapedPassive
+from casadi_posture.biomech.curve import torque_curve
+from casadi_posture.biomech.passive import ExponentialPassive, NoPassive, ReshapedPassive
+from casadi_posture.biomech.strength import ConstantStrength, TabulatedStrength
+from casadi_posture.biomech.torques import TorqueModel
+from casadi_posture.body.loads import Load, pack
 from casadi_posture.problem import load_problem
-from casadi_posture.strength import ConstantStrength, TabulatedStrength
-from casadi_posture.torques import TorqueModel
 
 G = 9.81
 

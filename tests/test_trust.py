@@ -17,14 +17,14 @@ import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
 
-from casadi_posture import nullspace
-from casadi_posture.batch import Case, run_case
 from casadi_posture.cli import main
-from casadi_posture.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik import nullspace
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.solvers import make_solver
+from casadi_posture.ik.tasks import Position
 from casadi_posture.problem import load_problem
+from casadi_posture.runs.batch import Case, run_case
 from casadi_posture.simulation import simulate
-from casadi_posture.solvers import make_solver
-from casadi_posture.tasks import Position
 
 HOLD = PROBLEMS / "holding_m45.toml"
 HOLD_TEXT = HOLD.read_text()
@@ -443,7 +443,7 @@ def test_a_huge_grid_needs_max_cases(tmp_path: Path) -> None:
 def test_a_failure_reason_is_one_line_and_the_traceback_goes_to_its_file(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import casadi_posture.batch as batch
+    import casadi_posture.runs.batch as batch
 
     def broken(problem, solver):
         raise RuntimeError("first line\nsecond line\nthird line")
@@ -483,7 +483,7 @@ def test_the_nullspace_solver_never_cycles_to_its_cap_on_a_5_dof_chain() -> None
     import casadi as ca
     from conftest import chain_3d
 
-    from casadi_posture.tasks import JointReference
+    from casadi_posture.ik.tasks import JointReference
 
     body = chain_3d()
     tip = ca.Function("tip", [body.q], [body.landmark("tip")])

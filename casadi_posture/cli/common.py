@@ -10,13 +10,13 @@ from typing import Any
 import click
 import numpy as np
 
-from .. import __version__, interrupt
-from ..errors import CasadiPostureError, ProblemError
-from ..plain import dumps
-from ..problem import Problem, load_problem
-from ..report import table
-from ..solvers import SOLVER_NAMES
-from ..static import GroupLoad, group_loads, rule
+from casadi_posture import __version__, interrupt
+from casadi_posture.errors import CasadiPostureError, ProblemError
+from casadi_posture.ik.solvers import SOLVER_NAMES
+from casadi_posture.output.plain import dumps
+from casadi_posture.output.report import table
+from casadi_posture.problem import Problem, load_problem
+from casadi_posture.static import GroupLoad, group_loads, rule
 
 INTERRUPTED = interrupt.EXIT_CODE
 

@@ -7,12 +7,7 @@ from pathlib import Path
 
 import click
 
-from ..compare import compare, rows
-from ..ik import ACHIEVED_TOLERANCE, IKResult
-from ..report import table
-from ..solvers import make_solver
-from ..static import GroupLoad, rule
-from .common import (
+from casadi_posture.cli.common import (
     SOLVER_OPTION,
     echo_torques,
     emit_json,
@@ -22,6 +17,11 @@ from .common import (
     problem_from,
     torque_breakdown,
 )
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
+from casadi_posture.ik.solvers import make_solver
+from casadi_posture.output.report import table
+from casadi_posture.runs.compare import compare, rows
+from casadi_posture.static import GroupLoad, rule
 
 
 @main.command()

@@ -8,13 +8,8 @@ from typing import Any
 import click
 import numpy as np
 
-from ..curve import torque_curve
-from ..describe import description
-from ..errors import ProblemError
-from ..problem import load_problem
-from ..report import table
-from ..static import rule
-from .common import (
+from casadi_posture.biomech.curve import torque_curve
+from casadi_posture.cli.common import (
     echo_torques,
     emit_json,
     json_groups,
@@ -23,6 +18,11 @@ from .common import (
     problem_from,
     torque_breakdown,
 )
+from casadi_posture.describe import description
+from casadi_posture.errors import ProblemError
+from casadi_posture.output.report import table
+from casadi_posture.problem import load_problem
+from casadi_posture.static import rule
 
 
 @main.command()
@@ -199,7 +199,7 @@ def curve(problem: str, dof: str, postures: tuple[str, ...], out: Path | None) -
     Example:
       casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion --out fig3.png
     """
-    from ..plots import figure_formats, plot_torque_curve
+    from casadi_posture.output.plots import figure_formats, plot_torque_curve
 
     out = out or Path(f"{Path(problem).stem}-{dof}.png")
     formats = figure_formats()

@@ -9,11 +9,11 @@ from typing import Any
 
 import click
 
-from .. import interrupt
-from ..report import table
-from ..static import law
-from ..whatif import MAX_CASES
-from .common import INTERRUPTED, SOLVER_OPTION, batch_options, main, problem_from
+from casadi_posture import interrupt
+from casadi_posture.cli.common import INTERRUPTED, SOLVER_OPTION, batch_options, main, problem_from
+from casadi_posture.output.report import table
+from casadi_posture.runs.whatif import MAX_CASES
+from casadi_posture.static import law
 
 
 @main.command()
@@ -63,9 +63,9 @@ def simulate(
       casadi-posture simulate problems/line_plane_hysteresis.toml --solver nullspace \\
           --duration 600 --out out/hysteresis
     """
-    from ..plots import plot_simulation
-    from ..results import SHOWN_RECOVERIES, summary, write_results
-    from ..simulation import simulate as run
+    from casadi_posture.output.plots import plot_simulation
+    from casadi_posture.output.results import SHOWN_RECOVERIES, summary, write_results
+    from casadi_posture.simulation import simulate as run
 
     given = (
         ("fatigue.strategy", strategy),
@@ -204,7 +204,7 @@ def batch(
       casadi-posture batch problems/ --out out/batch --jobs 2
       casadi-posture batch problems/ --out out/batch --jobs 2 --resume
     """
-    from ..batch import cases_from_paths, run_batch
+    from casadi_posture.runs.batch import cases_from_paths, run_batch
 
     cases = cases_from_paths(problems, solver)
     described = {"kind": "batch", "problems": list(problems), "solver": solver}
@@ -305,8 +305,8 @@ def whatif(
           --vary fatigue.strategy=active,passive --jobs 2
       casadi-posture whatif problems/holding_m45.toml --vary body.mass_kg=60,73,90 --static
     """
-    from ..batch import run_batch
-    from ..whatif import describe_grid, grid, parse_vary, plot_outcomes
+    from casadi_posture.runs.batch import run_batch
+    from casadi_posture.runs.whatif import describe_grid, grid, parse_vary, plot_outcomes
 
     parsed = [parse_vary(text, problem) for text in varies]
     out = out or Path("out", "whatif", Path(problem).stem)

@@ -36,13 +36,13 @@ from typing import Any, Literal
 
 from tqdm import tqdm
 
-from . import __version__, interrupt
-from .errors import MISSING, CasadiPostureError, ProblemError
-from .ik import ACHIEVED_TOLERANCE
-from .plain import dumps, plain
-from .problem import Problem, load_problem, read_problem_text
-from .solvers import make_solver
-from .static import STRENGTH_PCT_MVC, group_loads, rule
+from casadi_posture import __version__, interrupt
+from casadi_posture.errors import MISSING, CasadiPostureError, ProblemError
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.ik.solvers import make_solver
+from casadi_posture.output.plain import dumps, plain
+from casadi_posture.problem import Problem, load_problem, read_problem_text
+from casadi_posture.static import STRENGTH_PCT_MVC, group_loads, rule
 
 CASES = "cases"
 ROW = "row.json"
@@ -250,9 +250,9 @@ def _endurance_columns(groups: dict[str, tuple[float, float]]) -> dict[str, Any]
 
 
 def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dict[str, bytes]]:
-    from .plots import plot_simulation
-    from .results import summary, write_results
-    from .simulation import simulate
+    from casadi_posture.output.plots import plot_simulation
+    from casadi_posture.output.results import summary, write_results
+    from casadi_posture.simulation import simulate
 
     result = simulate(problem, solver)
     if result.stop == "interrupted":

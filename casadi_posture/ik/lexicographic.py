@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .hierarchy import Inequality, TaskHierarchy
-from .ik import ACTIVE_TOLERANCE, IKResult, active_constraints
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.result import ACTIVE_TOLERANCE, IKResult, active_constraints
 
 #: Re-check tolerances on the returned posture: bounds [rad], aᵀq - b [rad], kept rows
 #: of the higher levels' residuals [task units].

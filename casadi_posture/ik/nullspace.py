@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .hierarchy import Inequality, TaskHierarchy
-from .ik import IKResult, active_constraints
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.result import IKResult, active_constraints
 
 _TINY = 1e-300
 

@@ -11,7 +11,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
-from .body import BodyModel, Dof, Landmark, Segment, Vector3
+from casadi_posture.body.tree import BodyModel, Dof, Landmark, Segment, Vector3
 
 
 class SegmentGeometry(Protocol):

@@ -12,11 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from .batch import Case, safe_name
-from .errors import ProblemError
-from .overrides import parse_key, parse_value
-from .problem import load_problem, read_problem_text
-from .solvers import SOLVER_NAMES
+from casadi_posture.errors import ProblemError
+from casadi_posture.ik.solvers import SOLVER_NAMES
+from casadi_posture.problem import load_problem, read_problem_text
+from casadi_posture.runs.batch import Case, safe_name
+from casadi_posture.spec.overrides import parse_key, parse_value
 
 #: Outcomes plotted against every varied key, with their axis labels.
 OUTCOMES = {

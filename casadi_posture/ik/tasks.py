@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .body import BodyModel
-from .schema import (
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.spec.schema import (
     ComTask,
     LineTask,
     OrientationTask,
@@ -24,7 +24,7 @@ from .schema import (
     PositionTask,
     PostureTask,
 )
-from .schema import Task as TaskSpec
+from casadi_posture.spec.schema import Task as TaskSpec
 
 #: Largest task error removed per linearised iteration: 0.1 m (Buss's error clamping,
 #: ik-solvers §1.3) and 0.3 rad for angular tasks.

@@ -33,12 +33,12 @@ from typing import Literal
 
 import numpy as np
 
-from .body import BodyModel
-from .hierarchy import Inequality, TaskHierarchy
-from .ik import ACTIVE_TOLERANCE
-from .passive import PassiveTorque
-from .reduced_torque import Goal, JointState, Strategy, goal_angle
-from .torques import Torques
+from casadi_posture.adjustment.reduced_torque import Goal, JointState, Strategy, goal_angle
+from casadi_posture.biomech.passive import PassiveTorque
+from casadi_posture.biomech.torques import Torques
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.result import ACTIVE_TOLERANCE
 
 #: Steps shorter than this fraction of Δq_max keep the previous hyperplane direction.
 HOLD_FRACTION = 0.05

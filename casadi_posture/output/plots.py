@@ -12,9 +12,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .curve import TorqueCurve
-from .simulation import SimulationResult
-from .tasks import Line, Plane, Position
+from casadi_posture.biomech.curve import TorqueCurve
+from casadi_posture.ik.tasks import Line, Plane, Position
+from casadi_posture.simulation import SimulationResult
 
 
 def figure_formats() -> list[str]:

@@ -12,12 +12,12 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from . import __version__
-from .describe import description
-from .ik import ACHIEVED_TOLERANCE
-from .plain import dumps
-from .simulation import SimulationResult
-from .static import endurance, rule
+from casadi_posture import __version__
+from casadi_posture.describe import description
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.output.plain import dumps
+from casadi_posture.simulation import SimulationResult
+from casadi_posture.static import endurance, rule
 
 #: Recovery postures listed on screen; summary.json has them all.
 SHOWN_RECOVERIES = 5

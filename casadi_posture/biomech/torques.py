@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .body import BodyModel
-from .loads import LOAD_PARAMETERS, Load, pack
-from .passive import PassiveTorque
-from .strength import Strength
+from casadi_posture.biomech.passive import PassiveTorque
+from casadi_posture.biomech.strength import Strength
+from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
+from casadi_posture.body.tree import BodyModel
 
 
 @dataclass(frozen=True)

@@ -13,9 +13,9 @@ from functools import cache
 from importlib import resources
 from typing import Any, Literal, get_args
 
-from casadi_posture import parameters
+from casadi_posture.data import parameters
+from casadi_posture.data.parameters import Parameter
 from casadi_posture.errors import ProblemError
-from casadi_posture.parameters import Parameter
 
 Sex = Literal["male", "female"]
 

@@ -8,8 +8,8 @@ from typing import Protocol
 
 import casadi as ca
 
-from . import parameters
-from .parameters import Parameter
+from casadi_posture.data import parameters
+from casadi_posture.data.parameters import Parameter
 
 
 class Strength(Protocol):

@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .ik import IKResult
-from .problem import Problem
-from .solvers import make_solver
+from casadi_posture.ik.result import IKResult
+from casadi_posture.ik.solvers import make_solver
+from casadi_posture.problem import Problem
 
 #: Agreement: the same residual per level [task units] and, where the posture is unique,
 #: the same joint angles [deg]. Both solvers stop at about 1e-8 of residual; a joint

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .torques import TorqueModel
+from casadi_posture.biomech.torques import TorqueModel
 
 #: A zero of τa is "passive" (tissue near a limit carries the external torque, the paper's
 #: passive strategy) when τp there exceeds this share of the largest |τe| over the range;

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .body import BodyModel
-from .hierarchy import Inequality
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.ik.hierarchy import Inequality
 
 #: A joint within this of a limit [rad], or an inequality within this of its bound, is reported
 #: active (an interior-point solver stops about 1e-8 rad inside an active bound).

@@ -16,10 +16,10 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from casadi_posture import parameters
-from casadi_posture.endurance import PERCENT, EnduranceModel
+from casadi_posture.biomech.endurance import PERCENT, EnduranceModel
+from casadi_posture.data import parameters
+from casadi_posture.data.parameters import Parameter
 from casadi_posture.errors import ProblemError
-from casadi_posture.parameters import Parameter
 
 DEFAULT_RECOVERY_LAW = "threshold"
 _REGION_TABLE = "fatigue.frey_law_2012."

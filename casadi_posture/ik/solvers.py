@@ -7,11 +7,11 @@ from typing import Protocol
 
 import numpy as np
 
-from .hierarchy import Inequality, TaskHierarchy
-from .ik import IKResult
-from .lexicographic import LexicographicOptions, LexicographicSolver
-from .nullspace import NullspaceOptions, NullspaceSolver
-from .schema import SolverSpec
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.lexicographic import LexicographicOptions, LexicographicSolver
+from casadi_posture.ik.nullspace import NullspaceOptions, NullspaceSolver
+from casadi_posture.ik.result import IKResult
+from casadi_posture.spec.schema import SolverSpec
 
 SOLVER_NAMES = ("nullspace", "lexicographic")
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .errors import ProblemError
+from casadi_posture.errors import ProblemError
 
 Vector3 = tuple[float, float, float]
 

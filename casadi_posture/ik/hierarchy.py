@@ -9,9 +9,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .body import BodyModel
-from .errors import ProblemError
-from .tasks import Task
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.errors import ProblemError
+from casadi_posture.ik.tasks import Task
 
 
 @dataclass(frozen=True)

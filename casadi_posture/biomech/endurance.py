@@ -17,9 +17,9 @@ import numpy as np
 from numpy.polynomial import polynomial
 from numpy.typing import ArrayLike
 
-from casadi_posture import parameters
+from casadi_posture.data import parameters
+from casadi_posture.data.parameters import Parameter
 from casadi_posture.errors import ProblemError
-from casadi_posture.parameters import Parameter
 
 SECONDS_PER_MINUTE = 60.0
 PERCENT = 100.0

@@ -1,0 +1,1 @@
+"""The fatigue-driven adjustment: reduced active torque algorithm, fatigue constraint."""

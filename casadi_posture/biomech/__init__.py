@@ -1,0 +1,1 @@
+"""Joint biomechanics: external, passive and active torques; strength; endurance; fatigue."""

@@ -1,0 +1,1 @@
+"""The body: a kinematic tree of revolute DOFs, anthropometry, the built-in models, loads."""

@@ -1,5 +1,0 @@
-"""``python -m casadi_posture.cli``."""
-
-from ..console import main
-
-main()

@@ -1,0 +1,1 @@
+"""Prioritized inverse kinematics: tasks, priority levels, the nullspace and NLP solvers."""

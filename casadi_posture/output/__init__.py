@@ -1,0 +1,1 @@
+"""What a run leaves: plain data for files, result files, terminal tables and figures."""

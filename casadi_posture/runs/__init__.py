@@ -1,0 +1,1 @@
+"""Many solves at once: solver comparison, batches and what-if grids."""

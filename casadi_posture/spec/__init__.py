@@ -1,0 +1,1 @@
+"""The problem file as plain data: its schema and dotted-key overrides."""
