@@ -1,8 +1,59 @@
-"""casadi_posture: how a posture changes as muscles tire (Rodriguez & Boulic 2008) on CasADi."""
+"""casadi_posture: how a posture changes as muscles tire (Rodriguez & Boulic 2008) on CasADi.
 
+    >>> import casadi_posture as cp
+    >>> problem = cp.load("problems/holding_m45.toml")
+    >>> run = cp.simulate(problem)
+    >>> run.summary()["exhausted_group"]["half_joint"]
+    'elbow_flexors'
+
+The names below are the public API (``docs/api.md``); they load on first use, so that
+``import casadi_posture`` stays quick.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
 try:
     __version__ = version("casadi_posture")
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
+
+#: Public name -> the module that defines it.
+_PUBLIC = {
+    "load": "casadi_posture.api",
+    "loads": "casadi_posture.api",
+    "from_dict": "casadi_posture.api",
+    "describe": "casadi_posture.api",
+    "torques": "casadi_posture.api",
+    "solve": "casadi_posture.api",
+    "simulate": "casadi_posture.api",
+    "compare": "casadi_posture.api",
+    "whatif": "casadi_posture.api",
+    "batch": "casadi_posture.api",
+    "Simulation": "casadi_posture.api",
+    "Problem": "casadi_posture.problem",
+    "StaticAnswer": "casadi_posture.static",
+    "GroupLoad": "casadi_posture.static",
+    "Level": "casadi_posture.static",
+    "Comparison": "casadi_posture.runs.compare",
+    "BatchReport": "casadi_posture.runs.batch",
+    "CasadiPostureError": "casadi_posture.errors",
+    "ProblemError": "casadi_posture.errors",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _PUBLIC:
+        value = getattr(import_module(_PUBLIC[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'casadi_posture' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

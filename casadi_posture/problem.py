@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import hashlib
 import math
 import tomllib
 import types
 import typing
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -57,7 +58,9 @@ from casadi_posture.spec.schema import (
 @dataclass(frozen=True)
 class Problem:
     """A validated problem: the body, its torque model inputs, the posture [rad], settings and
-    the fatigue model (stateless: one state per simulation)."""
+    the fatigue model (stateless: one state per simulation); ``data`` is what it was read
+    from (the file's tables with the ``overrides`` applied), ``text_sha256`` the SHA-256 of
+    the file's text when it came from one."""
 
     path: Path
     spec: ProblemSpec
@@ -68,6 +71,9 @@ class Problem:
     posture: np.ndarray
     parameters: tuple[Parameter, ...]
     fatigue: FatigueModel
+    data: dict[str, Any] = field(default_factory=dict)
+    overrides: dict[str, Any] = field(default_factory=dict)
+    text_sha256: str | None = None
 
     @property
     def tasks(self) -> list[Task]:
@@ -116,26 +122,38 @@ def load_problem(
     the file); ``path`` then only names it in messages.
     """
     path = Path(path)
+    text = read_problem_text(path) if text is None else text
     try:
-        raw = tomllib.loads(read_problem_text(path) if text is None else text)
+        raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ProblemError(path, None, None, f"valid TOML ({error})") from None
     except RecursionError:
         raise ProblemError(
             path, None, None, f"valid TOML nested at most {MAX_NESTING} deep"
         ) from None
-    _check_nesting(raw, path)
-    raw = apply(raw, overrides or {}, path)
+    problem = problem_from_data(raw, path, overrides)
+    return replace(problem, text_sha256=hashlib.sha256(text.encode()).hexdigest())
+
+
+def problem_from_data(
+    data: Mapping[str, Any], name: str | Path = "<data>", overrides: Mapping[str, Any] | None = None
+) -> Problem:
+    """Validate and resolve a problem given as plain data (what a problem file holds, as a
+    dict); ``name`` names it in messages; ``overrides`` as for :func:`load_problem`."""
+    path = Path(name)
+    _check_nesting(data, path)
+    raw = apply(dict(data), overrides or {}, path)
     try:
         spec = ProblemSpec.model_validate(raw)
     except ValidationError as error:
         raise _problem_error(path, error, raw) from None
     try:
-        return resolve(spec, path)
+        problem = resolve(spec, path)
     except ProblemError as error:
         if error.file is None:
             raise ProblemError(path, error.key, error.value, error.expected) from None
         raise
+    return replace(problem, data=raw, overrides=dict(overrides or {}))
 
 
 #: Tables and arrays nested deeper than this are refused before validation.

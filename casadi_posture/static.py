@@ -1,5 +1,6 @@
-"""Static answers at one posture: each half-joint's load and endurance, by the rule the
-simulation follows (feasibility, and one rule for "unlimited").
+"""Static answers at one posture: the torques, each half-joint's load and endurance, by
+the rule the simulation follows (feasibility, and one rule for "unlimited"), at the
+problem's own posture or at the one the IK solves for.
 
 - A group that carries nothing (the antagonist of the one holding the load) never tires.
 - A load above 100 %MVC exceeds the group's strength: the posture cannot be held at all,
@@ -18,6 +19,9 @@ from dataclasses import dataclass
 from typing import Literal
 
 from casadi_posture.biomech.torques import Torques
+from casadi_posture.frames import frame
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
+from casadi_posture.ik.solvers import make_solver
 from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
@@ -106,3 +110,142 @@ def law(problem: Problem) -> str:
 def rule(problem: Problem) -> str:
     """The rule behind every endurance of this problem, in one line."""
     return f"{problem.fatigue.rule()}; 0 above {STRENGTH_PCT_MVC:g} %MVC (over strength)"
+
+
+@dataclass(frozen=True)
+class Level:
+    """A priority level's outcome: its tasks, residual [``unit``] and whether it was achieved
+    (residual at most ``ACHIEVED_TOLERANCE``)."""
+
+    level: int
+    tasks: str
+    residual: float
+    unit: str
+    achieved: bool
+
+
+@dataclass(frozen=True)
+class StaticAnswer:
+    """Torques, loads and endurances at one posture: the problem's own (:func:`at_posture`)
+    or the one the IK solves for (:func:`solve`, which sets ``ik`` and ``levels``).
+    ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can)."""
+
+    problem: Problem
+    torques: Torques
+    groups: tuple[GroupLoad, ...]
+    ik: IKResult | None
+    levels: tuple[Level, ...]
+    flags: tuple[str, ...]
+
+    @property
+    def posture_deg(self) -> dict[str, float]:
+        """The posture, per DOF [deg]."""
+        return {
+            d: math.degrees(float(a))
+            for d, a in zip(self.problem.body.dof_names, self.torques.q, strict=True)
+        }
+
+    @property
+    def reached(self) -> bool | None:
+        """Whether level 1 was achieved (None: nothing was solved)."""
+        return self.levels[0].achieved if self.levels else None
+
+    @property
+    def feasible(self) -> bool:
+        """No group needs more than its strength."""
+        return not any(g.over_strength for g in self.groups)
+
+    @property
+    def limiting(self) -> GroupLoad | None:
+        """The group with the shortest endurance (None: no group tires)."""
+        return limiting(self.groups)
+
+    @property
+    def rule(self) -> str:
+        """The rule behind every endurance (:func:`rule`)."""
+        return rule(self.problem)
+
+    def dofs(self) -> list[dict[str, float | str]]:
+        """Per DOF its angle [deg] and external, passive and active torque [N·m]."""
+        t = self.torques
+        return [
+            {
+                "name": d,
+                "angle_deg": math.degrees(float(t.q[i])),
+                "external_Nm": float(t.external[i]),
+                "passive_Nm": float(t.passive[i]),
+                "active_Nm": float(t.active[i]),
+            }
+            for i, d in enumerate(self.problem.body.dof_names)
+        ]
+
+    def half_joints(self) -> list[dict[str, float | str | None]]:
+        """Per half-joint its strength and torque [N·m], load [%MVC], endurance [min] (None:
+        unlimited; the verdict says why) and verdict."""
+        return [
+            {
+                "name": g.name,
+                "dof": g.dof,
+                "strength_Nm": g.strength,
+                "torque_Nm": g.torque,
+                "load_pct_mvc": g.load_pct_mvc,
+                "endurance_min": g.endurance_min if math.isfinite(g.endurance_min) else None,
+                "verdict": g.verdict,
+            }
+            for g in self.groups
+        ]
+
+    def to_frame(self) -> object:
+        """The half-joints as a pandas DataFrame (needs pandas)."""
+        return frame(self.half_joints())
+
+    def dofs_frame(self) -> object:
+        """The DOFs' torques as a pandas DataFrame (needs pandas)."""
+        return frame(self.dofs())
+
+    def levels_frame(self) -> object:
+        """The priority levels as a pandas DataFrame (needs pandas)."""
+        return frame([level.__dict__ for level in self.levels])
+
+
+def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnswer:
+    """Torques and loads at ``q`` [rad] (default: the problem's ``posture_deg``)."""
+    torques = problem.torque_model().evaluate(problem.posture if q is None else q)
+    groups = tuple(group_loads(problem, torques))
+    return StaticAnswer(problem, torques, groups, None, (), tuple(_over_strength(groups)))
+
+
+def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
+    """Solve the prioritized IK from the problem's posture with ``solver`` (default: the
+    file's) and answer at the solution; a problem without tasks is answered where it is."""
+    if not problem.tasks:
+        return at_posture(problem)
+    hierarchy = problem.hierarchy()
+    name = solver or problem.spec.solver.name
+    result = make_solver(name, hierarchy, problem.spec.solver).solve(problem.posture)
+    answer = at_posture(problem, result.q)
+    levels = tuple(
+        Level(k + 1, tasks, float(result.residuals[k]), unit, result.achieved[k])
+        for k, (tasks, unit) in enumerate(
+            zip(hierarchy.level_names(), hierarchy.level_units(), strict=True)
+        )
+    )
+    flags = [] if result.success else [f"the {name} solver failed: {result.status}"]
+    top = levels[0]
+    if not top.achieved:
+        flags.append(
+            f"level 1 ({top.tasks}) not achieved: residual {top.residual:.3g} {top.unit} > "
+            f"{ACHIEVED_TOLERANCE:g} {top.unit}; the task is out of the body's reach or "
+            "blocked by a joint limit (positions are in metres)"
+        )
+    return StaticAnswer(
+        problem, answer.torques, answer.groups, result, levels, (*flags, *answer.flags)
+    )
+
+
+def _over_strength(groups: Sequence[GroupLoad]) -> list[str]:
+    over = [g for g in groups if g.over_strength]
+    if not over:
+        return []
+    needs = ", ".join(f"{g.name} needs {g.load_pct_mvc:.2f} %MVC" for g in over)
+    return [f"over strength: {needs}; this posture cannot be held"]

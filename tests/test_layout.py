@@ -13,6 +13,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "casadi_posture"
 FLOORS = {
     "errors": 0,
     "interrupt": 0,
+    "frames": 0,
     "data": 1,
     "body": 2,
     "spec": 2,

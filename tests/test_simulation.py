@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -173,7 +174,16 @@ def test_simulate_command_writes_its_files(tmp_path: Path) -> None:
     assert summary["strategy"] == "passive" and summary["simulated_s"] == 200.0
     assert summary["half_joints"][0]["first_fatigue_threshold_s"] == 172.0
     manifest = json.loads((out / "manifest.json").read_text())
-    assert manifest["ipopt"] != "unknown" and manifest["problem"]["model"] == "sagittal_arm"
+    assert manifest["ipopt"] != "unknown"
+    assert manifest["resolved_problem"]["model"] == "sagittal_arm"
+    assert manifest["command"][:2] == ["casadi-posture", "simulate"]
+    assert manifest["overrides"] == {
+        "fatigue.strategy": "passive",
+        "simulation.duration_s": 200.0,
+    }
+    text = (PROBLEMS / "holding_m45.toml").read_bytes()
+    assert manifest["problem_sha256"] == hashlib.sha256(text).hexdigest()
+    assert "wall_time_s" in manifest["timing"] and "wall_time_s" not in json.dumps(summary)
     with (out / "timeline.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert len(rows) == 201

@@ -250,7 +250,7 @@ def test_a_whatif_over_a_problem_without_tasks_lists_its_cases_as_skipped(tmp_pa
 def test_an_internal_error_is_one_line_unless_asked_for(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import casadi_posture.cli.model as model
+    import casadi_posture.api as model
 
     def broken(problem):
         raise RuntimeError("unexpected\nsecond line")

@@ -114,7 +114,7 @@ def test_whatif_static_marks_unreachable_cases(tmp_path: Path) -> None:
     near, far = rows["[0.35, 0.0, -0.25]"], rows["[0.6, 0.0, 0.0]"]
     assert near["status"] == "ok" and near["reached"] == "True"
     assert far["status"] == "flagged" and far["reached"] == "False"
-    assert float(far["residual_level1_m"]) > 0.04 and "level 1 not reached" in far["flags"]
+    assert float(far["residual_level1_m"]) > 0.04 and "not achieved" in far["flags"]
     assert "NO" in result.output
 
 
@@ -448,7 +448,7 @@ def test_a_failure_reason_is_one_line_and_the_traceback_goes_to_its_file(
     def broken(problem, solver):
         raise RuntimeError("first line\nsecond line\nthird line")
 
-    monkeypatch.setattr(batch, "static_outcomes", broken)
+    monkeypatch.setattr(batch, "solve", broken)
     outcome = run_case(Case("c", str(HOLD), {}, None, False, HOLD_TEXT))
     assert outcome.row["status"] == "failed"
     assert outcome.row["error"] == "RuntimeError: first line"

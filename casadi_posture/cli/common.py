@@ -8,7 +8,6 @@ import sys
 from typing import Any
 
 import click
-import numpy as np
 
 from casadi_posture import __version__, interrupt
 from casadi_posture.errors import CasadiPostureError, ProblemError
@@ -16,7 +15,8 @@ from casadi_posture.ik.solvers import SOLVER_NAMES
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import table
 from casadi_posture.problem import Problem, load_problem
-from casadi_posture.static import GroupLoad, group_loads, rule
+from casadi_posture.spec.overrides import parse_key, parse_value
+from casadi_posture.static import StaticAnswer
 
 INTERRUPTED = interrupt.EXIT_CODE
 
@@ -30,6 +30,7 @@ class _Commands(click.Group):
 
     def invoke(self, ctx: click.Context) -> Any:
         words = [*getattr(ctx, "_protected_args", []), *ctx.args]
+        ctx.meta["command_line"] = ["casadi-posture", *words]
         try:
             return super().invoke(ctx)
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException) as done:
@@ -92,10 +93,31 @@ SOLVER_OPTION = click.option(
 )
 
 
+def parse_sets(items: tuple[str, ...], path: str | None = None) -> dict[str, Any]:
+    """``--set KEY=VALUE`` options as dotted-key overrides, values read as TOML reads them
+    (``5``, ``2.5``, ``"passive"`` or ``passive``, ``[0, 1]``)."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key or not value:
+            raise ProblemError(path, "--set", item, "KEY=VALUE such as fatigue.strategy=passive")
+        try:
+            parse_key(key)
+        except ProblemError as error:
+            raise ProblemError(path, "--set", item, error.expected) from None
+        out[key] = parse_value(value)
+    return out
+
+
 def problem_from(
-    path: str, postures: tuple[str, ...] = (), overrides: dict[str, Any] | None = None
+    path: str,
+    postures: tuple[str, ...] = (),
+    overrides: dict[str, Any] | None = None,
+    sets: tuple[str, ...] = (),
 ) -> Problem:
-    problem = load_problem(path, overrides)
+    """The problem file with ``--set`` overrides (then the command's own ones) and
+    ``--posture`` angles applied, validated like the file."""
+    problem = load_problem(path, parse_sets(sets, path) | (overrides or {}))
     if postures:
         problem = problem.with_posture(parse_postures(postures, path))
     return problem
@@ -120,43 +142,12 @@ def emit_json(data: Any) -> None:
     click.echo(dumps(data))
 
 
-def torque_breakdown(problem: Problem, q: np.ndarray) -> tuple[list[dict], list[GroupLoad]]:
-    """Per DOF the torques [N·m] and per half-joint its load and endurance at ``q``."""
-    result = problem.torque_model().evaluate(q)
-    dofs = [
-        {
-            "name": d.name,
-            "angle_deg": math.degrees(result.q[i]),
-            "external_Nm": float(result.external[i]),
-            "passive_Nm": float(result.passive[i]),
-            "active_Nm": float(result.active[i]),
-        }
-        for i, d in enumerate(problem.body.dofs)
-    ]
-    return dofs, group_loads(problem, result)
-
-
-def json_groups(groups: list[GroupLoad]) -> list[dict]:
-    """Half-joint rows for JSON: an endurance of null is unlimited (see the verdict)."""
-    return [
-        {
-            "name": g.name,
-            "dof": g.dof,
-            "strength_Nm": g.strength,
-            "torque_Nm": g.torque,
-            "load_pct_mvc": g.load_pct_mvc,
-            "endurance_min": g.endurance_min,
-            "verdict": g.verdict,
-        }
-        for g in groups
-    ]
-
-
-def echo_torques(problem: Problem, dofs: list[dict], groups: list[GroupLoad]) -> None:
+def echo_torques(answer: StaticAnswer) -> None:
+    """The DOF table and the half-joint table of a static answer, and its endurance rule."""
     click.echo(
         table(
             ["DOF", "angle (deg)", "external (N·m)", "passive (N·m)", "active (N·m)"],
-            [list(d.values()) for d in dofs],
+            [list(d.values()) for d in answer.dofs()],
         )
     )
     click.echo()
@@ -181,21 +172,30 @@ def echo_torques(problem: Problem, dofs: list[dict], groups: list[GroupLoad]) ->
                     g.endurance_min,
                     g.verdict.upper() if g.over_strength else g.verdict,
                 ]
-                for g in groups
+                for g in answer.groups
             ],
             digits=2,
         )
     )
-    click.echo(f"\nendurance rule: {rule(problem)}")
+    click.echo(f"\nendurance rule: {answer.rule}")
 
 
-def over_strength_message(groups: list[GroupLoad]) -> str | None:
-    """One line naming every group over strength, or None."""
-    over = [g for g in groups if g.over_strength]
-    if not over:
-        return None
-    needs = ", ".join(f"{g.name} needs {g.load_pct_mvc:.2f} %MVC" for g in over)
-    return f"over strength: {needs}; this posture cannot be held"
+def command_line() -> list[str]:
+    """The command line that started this command, for manifests."""
+    return list(click.get_current_context().meta.get("command_line", []))
+
+
+SET_OPTION = click.option(
+    "--set",
+    "sets",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="Set a problem key before validation (repeatable): fatigue.strategy=passive, "
+    "loads[0].mass_kg=5.",
+)
+FORCE_OPTION = click.option(
+    "--force", is_flag=True, help="Overwrite the output if it exists (otherwise refused)."
+)
 
 
 BATCH_OPTIONS = [
@@ -215,7 +215,10 @@ BATCH_OPTIONS = [
     click.option(
         "--resume",
         is_flag=True,
-        help="Continue a batch in --out: finished cases are not run again.",
+        help="Continue the run in --out: finished cases are kept, failed ones run again.",
+    ),
+    click.option(
+        "--force", is_flag=True, help="Start over: delete earlier results in --out first."
     ),
     click.option("--quiet", is_flag=True, help="No progress bar."),
 ]

@@ -2,33 +2,32 @@
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import click
 
+from casadi_posture import api
 from casadi_posture.cli.common import (
+    FORCE_OPTION,
+    SET_OPTION,
     SOLVER_OPTION,
     echo_torques,
     emit_json,
-    json_groups,
     main,
-    over_strength_message,
     problem_from,
-    torque_breakdown,
 )
-from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
-from casadi_posture.ik.solvers import make_solver
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.output.report import table
-from casadi_posture.runs.compare import compare, rows
-from casadi_posture.static import GroupLoad, rule
+from casadi_posture.output.results import write_table
+from casadi_posture.runs.compare import rows
 
 
 @main.command()
 @click.argument("problem", type=click.Path(dir_okay=False))
 @SOLVER_OPTION
+@SET_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def solve(problem: str, solver: str | None, as_json: bool) -> None:
+def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool) -> None:
     """Solve the prioritized IK of a problem from its posture_deg; print the posture,
     the residual of each priority level and whether it was achieved, the active
     constraints and the torques there.
@@ -43,48 +42,35 @@ def solve(problem: str, solver: str | None, as_json: bool) -> None:
       casadi-posture solve problems/line_plane_hysteresis.toml
       casadi-posture solve problems/line_plane_hysteresis.toml --solver nullspace --json
     """
-    resolved = problem_from(problem)
-    hierarchy = resolved.hierarchy()
-    name = solver or resolved.spec.solver.name
-    result = make_solver(name, hierarchy, resolved.spec.solver).solve(resolved.posture)
-    dofs, groups = torque_breakdown(resolved, result.q)
-    levels = [
-        {
-            "level": k + 1,
-            "tasks": tasks,
-            "residual": float(result.residuals[k]),
-            "unit": unit,
-            "achieved": result.achieved[k],
-        }
-        for k, (tasks, unit) in enumerate(
-            zip(hierarchy.level_names(), hierarchy.level_units(), strict=True)
-        )
-    ]
-    flags = solve_flags(result, levels, groups)
+    resolved = problem_from(problem, sets=sets)
+    resolved.hierarchy()  # a problem without tasks is refused, naming its file
+    answer = api.solve(resolved, solver)
+    result = answer.ik
+    levels = [level.__dict__ for level in answer.levels]
     if as_json:
         emit_json(
             {
                 "problem": problem,
-                "solver": name,
+                "solver": result.solver,
                 "status": result.status,
                 "success": result.success,
-                "reached": result.achieved[0],
-                "flags": flags,
+                "reached": answer.reached,
+                "flags": list(answer.flags),
                 "iterations": result.iterations,
                 "wall_time_s": result.wall_time_s,
-                "posture_deg": {d["name"]: d["angle_deg"] for d in dofs},
+                "posture_deg": answer.posture_deg,
                 "achieved_tolerance": ACHIEVED_TOLERANCE,
                 "levels": levels,
                 "at_limits": list(result.at_limits),
                 "inequality_active": result.inequality_active,
-                "endurance_rule": rule(resolved),
-                "torques": {"dofs": dofs, "half_joints": json_groups(groups)},
+                "endurance_rule": answer.rule,
+                "torques": {"dofs": answer.dofs(), "half_joints": answer.half_joints()},
             }
         )
     else:
         click.echo(
-            f"{problem}: {name}, status {result.status}, {result.iterations} iterations, "
-            f"{1e3 * result.wall_time_s:.2f} ms\n"
+            f"{problem}: {result.solver}, status {result.status}, {result.iterations} "
+            f"iterations, {1e3 * result.wall_time_s:.2f} ms\n"
         )
         click.echo(
             table(
@@ -103,25 +89,11 @@ def solve(problem: str, solver: str | None, as_json: bool) -> None:
         )
         limits = ", ".join(result.at_limits) or "none"
         click.echo(f"\njoints at a limit: {limits}\n")
-        echo_torques(resolved, dofs, groups)
-        for flag in flags:
+        echo_torques(answer)
+        for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")
-    if flags:
+    if answer.flags:
         raise SystemExit(1)
-
-
-def solve_flags(result: IKResult, levels: list[dict], groups: list[GroupLoad]) -> list[str]:
-    """Why a solve's answer cannot be used as it is, one line each (empty: it can)."""
-    flags = [] if result.success else [f"the {result.solver} solver failed: {result.status}"]
-    top = levels[0]
-    if not top["achieved"]:
-        flags.append(
-            f"level 1 ({top['tasks']}) not achieved: residual {top['residual']:.3g} "
-            f"{top['unit']} > {ACHIEVED_TOLERANCE:g} {top['unit']}; the task is out of the "
-            "body's reach or blocked by a joint limit (positions are in metres)"
-        )
-    over = over_strength_message(groups)
-    return flags + ([over] if over else [])
 
 
 @main.command(name="compare")
@@ -132,7 +104,11 @@ def solve_flags(result: IKResult, levels: list[dict], groups: list[GroupLoad]) -
     default=None,
     help="Folder for compare.csv.",
 )
-def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
+@SET_OPTION
+@FORCE_OPTION
+def compare_command(
+    problems: tuple[str, ...], out: Path | None, sets: tuple[str, ...], force: bool
+) -> None:
     """Solve each problem with both IK solvers from the same start and compare them:
     residual per level, largest joint difference, wall time, status, and a verdict
     that says why they disagree (an unreachable target, two posture families).
@@ -144,14 +120,16 @@ def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
     Example:
       casadi-posture compare problems/*.toml --out out/compare
     """
+    if out is not None:
+        api.check_out(out, force=force)
     table_rows: list[dict[str, object]] = []
     flagged = []
     for path in problems:
-        resolved = problem_from(path)
+        resolved = problem_from(path, sets=sets)
         if not resolved.tasks:
             click.echo(f"skipped {path}: no tasks")
             continue
-        comparison = compare(resolved)
+        comparison = api.compare(resolved)
         if not comparison.agree:
             flagged.append(f"{path}: the solvers disagree: {comparison.verdict}")
         unreached = [
@@ -195,10 +173,8 @@ def compare_command(problems: tuple[str, ...], out: Path | None) -> None:
     )
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        with (out / "compare.csv").open("w", newline="", encoding="utf-8") as handle:
-            writer = csv.DictWriter(handle, fieldnames=list(table_rows[0]) if table_rows else [])
-            writer.writeheader()
-            writer.writerows(table_rows)
+        columns = {k: [r[k] for r in table_rows] for k in (table_rows[0] if table_rows else {})}
+        write_table(columns, out / "compare.csv")
         click.echo(f"\nwritten: {out / 'compare.csv'}")
     for line in flagged:
         click.echo(f"FLAGGED: {line}")

@@ -1,4 +1,4 @@
-"""Commands on the model and its torques: validate, describe, torques, curve."""
+"""Commands on the model and its torques: init, validate, describe, torques, curve."""
 
 from __future__ import annotations
 
@@ -8,26 +8,48 @@ from typing import Any
 import click
 import numpy as np
 
+from casadi_posture import api
 from casadi_posture.biomech.curve import torque_curve
 from casadi_posture.cli.common import (
+    FORCE_OPTION,
+    SET_OPTION,
     echo_torques,
     emit_json,
-    json_groups,
     main,
-    over_strength_message,
     problem_from,
-    torque_breakdown,
 )
-from casadi_posture.describe import description
+from casadi_posture.data.templates import TEMPLATES, template
 from casadi_posture.errors import ProblemError
 from casadi_posture.output.report import table
-from casadi_posture.problem import load_problem
-from casadi_posture.static import rule
+
+
+@main.command()
+@click.argument("template_or_file")
+@click.argument("file", required=False, type=click.Path(dir_okay=False, path_type=Path))
+@FORCE_OPTION
+def init(template_or_file: str, file: Path | None, force: bool) -> None:
+    """Write a commented problem file to start from: TEMPLATE is hold (the default: a load
+    held with the wrist on a line, the paper's experiment) or elbow (only the elbow
+    moves, the paper's Fig. 3). Every key is explained in the file.
+
+    \b
+    Example:
+      casadi-posture init my_hold.toml
+      casadi-posture init elbow my_elbow.toml
+    """
+    name, target = (template_or_file, file) if file else ("hold", Path(template_or_file))
+    if name not in TEMPLATES:
+        raise ProblemError(None, "TEMPLATE", name, f"one of {sorted(TEMPLATES)}")
+    api.check_out(target, force=force, key="FILE")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(template(name), encoding="utf-8")
+    click.echo(f"written: {target} (from the {name} template; check it with validate)")
 
 
 @main.command()
 @click.argument("problems", nargs=-1, required=True, type=click.Path(dir_okay=False))
-def validate(problems: tuple[str, ...]) -> None:
+@SET_OPTION
+def validate(problems: tuple[str, ...], sets: tuple[str, ...]) -> None:
     """Check problem files; print 'ok' per valid file.
 
     \b
@@ -35,7 +57,7 @@ def validate(problems: tuple[str, ...]) -> None:
       casadi-posture validate problems/*.toml
     """
     for path in problems:
-        problem = load_problem(path)
+        problem = problem_from(path, sets=sets)
         click.echo(
             f"ok  {path}  ({problem.body.name}, {problem.body.n} DOF, "
             f"{len(problem.loads)} loads, {len(problem.tasks)} tasks)"
@@ -44,8 +66,9 @@ def validate(problems: tuple[str, ...]) -> None:
 
 @main.command()
 @click.argument("problem", type=click.Path(dir_okay=False))
+@SET_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def describe(problem: str, as_json: bool) -> None:
+def describe(problem: str, sets: tuple[str, ...], as_json: bool) -> None:
     """Show the resolved model: DOFs, segments, loads, tasks, parameters and their sources.
 
     Positions are world coordinates at the zero posture (x forward, y left, z up).
@@ -55,7 +78,7 @@ def describe(problem: str, as_json: bool) -> None:
       casadi-posture describe problems/holding_m45.toml
       casadi-posture describe problems/holding_m45.toml --json > model.json
     """
-    data = description(problem_from(problem))
+    data = api.describe(problem_from(problem, sets=sets))
     if as_json:
         emit_json(data)
         return
@@ -137,8 +160,9 @@ def describe(problem: str, as_json: bool) -> None:
     metavar="NAME=DEG",
     help="Set a DOF angle in degrees (repeatable); default: the file's posture_deg.",
 )
+@SET_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
+def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_json: bool) -> None:
     """Per DOF the external, passive and active torque; per half-joint its load, endurance
     and a verdict: carries nothing, unlimited (the fatigue model accumulates nothing at
     this load), limited, or over strength (above 100 %MVC: endurance 0, the posture cannot
@@ -150,28 +174,27 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
       casadi-posture torques problems/holding_m45.toml --posture shoulder_flexion=90 \\
           --posture elbow_flexion=0 --json
     """
-    resolved = problem_from(problem, postures)
-    dofs, groups = torque_breakdown(resolved, resolved.posture)
-    over = over_strength_message(groups)
+    resolved = problem_from(problem, postures, sets=sets)
+    answer = api.torques(resolved)
     if as_json:
         emit_json(
             {
                 "problem": problem,
                 "endurance_model": resolved.spec.fatigue.endurance,
                 "recovery_law": resolved.fatigue.name,
-                "endurance_rule": rule(resolved),
-                "feasible": over is None,
-                "flags": [over] if over else [],
-                "dofs": dofs,
-                "half_joints": json_groups(groups),
+                "endurance_rule": answer.rule,
+                "feasible": answer.feasible,
+                "flags": list(answer.flags),
+                "dofs": answer.dofs(),
+                "half_joints": answer.half_joints(),
             }
         )
     else:
         click.echo(f"{problem} ({resolved.body.name})\n")
-        echo_torques(resolved, dofs, groups)
-        if over:
-            click.echo(f"FLAGGED: {over}")
-    if over:
+        echo_torques(answer)
+        for flag in answer.flags:
+            click.echo(f"FLAGGED: {flag}")
+    if answer.flags:
         raise SystemExit(1)
 
 
@@ -191,7 +214,16 @@ def torques(problem: str, postures: tuple[str, ...], as_json: bool) -> None:
     default=None,
     help="Figure to write: .png, .pdf, .svg, ... [default: <problem>-<dof>.png].",
 )
-def curve(problem: str, dof: str, postures: tuple[str, ...], out: Path | None) -> None:
+@SET_OPTION
+@FORCE_OPTION
+def curve(
+    problem: str,
+    dof: str,
+    postures: tuple[str, ...],
+    out: Path | None,
+    sets: tuple[str, ...],
+    force: bool,
+) -> None:
     """Plot τp, τe, τa and -τa over one DOF's range (the paper's Fig. 3) and print the
     angles where the active torque is zero.
 
@@ -206,7 +238,8 @@ def curve(problem: str, dof: str, postures: tuple[str, ...], out: Path | None) -
     if out.suffix.lstrip(".").lower() not in formats:
         expected = f"a figure file ending in one of {', '.join('.' + f for f in sorted(formats))}"
         raise ProblemError(problem, "--out", str(out), expected)
-    resolved = problem_from(problem, postures)
+    api.check_out(out, force=force)
+    resolved = problem_from(problem, postures, sets=sets)
     if dof not in resolved.body.index:
         raise ProblemError(problem, "--dof", dof, f"one of {resolved.body.dof_names}")
     result = torque_curve(resolved.torque_model(), resolved.posture, dof)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import shutil
 from pathlib import Path
@@ -9,9 +10,22 @@ from typing import Any
 
 import click
 
-from casadi_posture import interrupt
-from casadi_posture.cli.common import INTERRUPTED, SOLVER_OPTION, batch_options, main, problem_from
+from casadi_posture import api, interrupt
+from casadi_posture.cli.common import (
+    FORCE_OPTION,
+    INTERRUPTED,
+    SET_OPTION,
+    SOLVER_OPTION,
+    batch_options,
+    command_line,
+    main,
+    parse_sets,
+    problem_from,
+)
+from casadi_posture.errors import ProblemError
+from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
+from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
 from casadi_posture.runs.whatif import MAX_CASES
 from casadi_posture.static import law
 
@@ -39,6 +53,8 @@ from casadi_posture.static import law
     default=None,
     help="Output folder [default: out/simulate/<problem>-<strategy>-<solver>].",
 )
+@SET_OPTION
+@FORCE_OPTION
 def simulate(
     problem: str,
     solver: str | None,
@@ -46,10 +62,13 @@ def simulate(
     r_min: float | None,
     duration: float | None,
     out: Path | None,
+    sets: tuple[str, ...],
+    force: bool,
 ) -> None:
     """Simulate holding the tasks over time: fatigue, the fatigue-reducing constraint with
-    its hysteresis, recovery. Writes timeline.csv, events.csv, summary.json,
-    manifest.json and figures into the output folder.
+    its hysteresis, recovery. Writes timeline.csv (and .parquet), events.csv,
+    summary.json, manifest.json and figures into the output folder, which must be new or
+    empty (or --force); `casadi-posture rerun OUT/manifest.json` repeats the run.
 
     The run ends at its duration, when a muscle group is exhausted (fatigue 1, or a load
     above its strength), or at once when level 1 cannot be achieved at the start. Exit
@@ -61,12 +80,8 @@ def simulate(
     Example:
       casadi-posture simulate problems/holding_m45.toml --strategy passive
       casadi-posture simulate problems/line_plane_hysteresis.toml --solver nullspace \\
-          --duration 600 --out out/hysteresis
+          --duration 600 --set fatigue.recovery_law=3cc_r --out out/hysteresis
     """
-    from casadi_posture.output.plots import plot_simulation
-    from casadi_posture.output.results import SHOWN_RECOVERIES, summary, write_results
-    from casadi_posture.simulation import simulate as run
-
     given = (
         ("fatigue.strategy", strategy),
         ("fatigue.r_min", r_min),
@@ -74,21 +89,85 @@ def simulate(
     )
     overrides = {key: value for key, value in given if value is not None}
     with interrupt.deferred():
-        resolved = problem_from(problem, overrides=overrides)
-        result = run(resolved, solver)
+        resolved = problem_from(problem, overrides=overrides, sets=sets)
+        name = solver or resolved.spec.solver.name
         out = out or Path(
-            "out", "simulate", f"{Path(problem).stem}-{result.settings.strategy}-{result.solver}"
+            "out", "simulate", f"{Path(problem).stem}-{resolved.spec.fatigue.strategy}-{name}"
         )
-        files = write_results(result, out) + plot_simulation(result, out)
-    report = summary(result)
+        api.check_out(out, force=force)
+        run = api.simulate(resolved, solver)
+        files = _write(run, out, command_line())
+    raise SystemExit(_report(run, files, law(resolved)))
+
+
+@main.command()
+@click.argument("manifest", type=click.Path(dir_okay=False, exists=False))
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: the manifest's folder + '-rerun'].",
+)
+@FORCE_OPTION
+def rerun(manifest: str, out: Path | None, force: bool) -> None:
+    """Repeat the simulation a manifest.json records (the problem's data after its
+    overrides, the solver) and check that its summary.json is the same, byte for byte,
+    as the one beside the manifest. Exit code 1 when it differs.
+
+    \b
+    Example:
+      casadi-posture rerun out/simulate/holding_m45-active-lexicographic/manifest.json
+    """
+    path = Path(manifest)
+    record = _manifest(path)
+    out = out or path.parent.with_name(path.parent.name + "-rerun")
+    with interrupt.deferred():
+        api.check_out(out, force=force)
+        resolved = api.from_dict(record["problem_data"], record["problem_path"])
+        run = api.simulate(resolved, record["solver"])
+        files = _write(run, out, command_line())
+    code = _report(run, files, law(resolved))
+    original = path.parent / "summary.json"
+    if not original.exists():
+        click.echo(f"no summary.json beside {path} to compare with")
+        raise SystemExit(code)
+    same = original.read_bytes() == (out / "summary.json").read_bytes()
+    click.echo(f"summary.json {'identical to' if same else 'DIFFERS from'} {original}")
+    raise SystemExit(code or (0 if same else 1))
+
+
+def _manifest(path: Path) -> dict[str, Any]:
+    """A manifest's data; a file that is not one is a one-line error."""
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ProblemError(path, None, None, "the file does not exist") from None
+    except (OSError, UnicodeDecodeError, ValueError) as error:
+        raise ProblemError(path, None, None, f"a manifest.json ({error})") from None
+    missing = [k for k in ("problem_data", "problem_path", "solver") if k not in record]
+    if not isinstance(record, dict) or missing:
+        raise ProblemError(path, None, None, "a manifest.json written by simulate")
+    return record
+
+
+def _write(run: api.Simulation, out: Path, command: list[str]) -> list[Path]:
+    files = write_results(run.result, out, command=command)
+    return files + plot_simulation(run.result, out)
+
+
+def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
+    """Print what simulate and rerun show; their exit code."""
+    result = run.result
+    problem = str(result.problem.path)
+    report = run.summary()
     stats = report["solver_statistics"]
     click.echo(
         f"{problem}: {report['simulated_s']:g} of {report['duration_s']:g} s simulated, "
-        f"{result.solver} solver, {report['strategy']} strategy; {stats['wall_time_s']:.2f} s "
-        f"wall, {100 * (1 - stats['share_outside_ik']):.0f} % in IK, "
+        f"{result.solver} solver, {report['strategy']} strategy; {result.wall_time_s:.2f} s "
+        f"wall, {100 * result.ik_time_s / max(result.wall_time_s, 1e-12):.0f} % in IK, "
         f"{stats['ik_fallbacks']} steps by the other solver, {stats['ik_failures']} IK failures"
     )
-    click.echo(f"recovery law: {law(resolved)}")
+    click.echo(f"recovery law: {recovery_law}")
     click.echo(f"endurance rule: {report['endurance_rule']}\n")
     click.echo(
         table(
@@ -127,9 +206,8 @@ def simulate(
         click.echo(f"FLAGGED: {flag}")
     click.echo("files: " + ", ".join(str(f) for f in files))
     if result.stop == "interrupted" or interrupt.requested():
-        raise SystemExit(INTERRUPTED)
-    if report["flags"]:
-        raise SystemExit(1)
+        return INTERRUPTED
+    return 1 if report["flags"] else 0
 
 
 def _minutes(value: float | None, verdict: str | None) -> float | None:
@@ -178,14 +256,17 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
     help="Output folder: cases/<case>/, summary.csv and run.json.",
 )
 @SOLVER_OPTION
+@SET_OPTION
 @batch_options
 def batch(
     problems: tuple[str, ...],
     out: Path,
     solver: str | None,
+    sets: tuple[str, ...],
     jobs: int,
     scheduler: str | None,
     resume: bool,
+    force: bool,
     quiet: bool,
 ) -> None:
     """Simulate many problem files (folders give their *.toml): each case in its own
@@ -204,18 +285,16 @@ def batch(
       casadi-posture batch problems/ --out out/batch --jobs 2
       casadi-posture batch problems/ --out out/batch --jobs 2 --resume
     """
-    from casadi_posture.runs.batch import cases_from_paths, run_batch
-
-    cases = cases_from_paths(problems, solver)
-    described = {"kind": "batch", "problems": list(problems), "solver": solver}
-    report = run_batch(
-        cases,
+    report = api.batch(
+        problems,
         out,
+        solver=solver,
         jobs=jobs,
         scheduler=scheduler,
         resume=resume,
+        force=force,
+        overrides=parse_sets(sets),
         quiet=quiet,
-        describe=described,
     )
     counts = ", ".join(
         f"{len(report.with_status(status))} {status}"
@@ -231,14 +310,14 @@ def batch(
         click.echo(f"failed {row['case']}: {row['error']}")
     for row in report.with_status("skipped"):
         click.echo(f"skipped {row['case']}: {row['error']}")
-    _finish(report, len(cases))
+    _finish(report)
 
 
-def _finish(report: Any, total: int) -> None:
+def _finish(report: Any) -> None:
     """Exit 130 after Ctrl-C, 1 when a case is flagged or failed."""
     if report.interrupted:
         click.echo(
-            f"interrupted: {len(report.rows)} of {total} cases finished and kept; "
+            f"interrupted: {len(report.rows)} of {report.total} cases finished and kept; "
             "rerun with --resume to run the rest",
             err=True,
         )
@@ -274,7 +353,14 @@ def _finish(report: Any, total: int) -> None:
     show_default=True,
     help="Refuse a larger grid (a guard against a typo that would start a huge run).",
 )
+@click.option(
+    "--paired",
+    is_flag=True,
+    help="Pair the varied values instead of a full grid: the i-th value of every --vary "
+    "together (lists of one length), e.g. a small woman against a tall man.",
+)
 @SOLVER_OPTION
+@SET_OPTION
 @batch_options
 def whatif(
     problem: str,
@@ -282,10 +368,13 @@ def whatif(
     out: Path | None,
     static: bool,
     max_cases: int,
+    paired: bool,
     solver: str | None,
+    sets: tuple[str, ...],
     jobs: int,
     scheduler: str | None,
     resume: bool,
+    force: bool,
     quiet: bool,
 ) -> None:
     """What if the load, the line, the strategy, R_min, the thresholds, the body or the
@@ -300,26 +389,30 @@ def whatif(
 
     \b
     Example:
-      casadi-posture whatif problems/holding_m45.toml --vary loads[0].mass_kg=1,2.5,5
-      casadi-posture whatif problems/holding_m25.toml --vary tasks[0].elevation_deg=0,-25,-45 \\
+      casadi-posture whatif problems/holding_m45.toml --vary 'loads[0].mass_kg=1,2.5,5'
+      casadi-posture whatif problems/holding_m25.toml --vary 'tasks[0].elevation_deg=0,-25,-45' \\
           --vary fatigue.strategy=active,passive --jobs 2
-      casadi-posture whatif problems/holding_m45.toml --vary body.mass_kg=60,73,90 --static
+      casadi-posture whatif problems/holding_m45.toml --static --paired \\
+          --vary body.sex=female,male --vary body.stature_m=1.52,1.87
     """
-    from casadi_posture.runs.batch import run_batch
-    from casadi_posture.runs.whatif import describe_grid, grid, parse_vary, plot_outcomes
+    from casadi_posture.runs.whatif import parse_vary, plot_outcomes
 
     parsed = [parse_vary(text, problem) for text in varies]
     out = out or Path("out", "whatif", Path(problem).stem)
-    cases = grid(problem, parsed, solver=solver, simulate=not static, max_cases=max_cases)
-    described = describe_grid(problem, parsed, solver=solver, simulate=not static)
-    report = run_batch(
-        cases,
+    report = api.whatif(
+        problem,
+        dict(parsed),
         out,
+        static=static,
+        paired=paired,
+        solver=solver,
         jobs=jobs,
         scheduler=scheduler,
         resume=resume,
+        force=force,
+        max_cases=max_cases,
+        overrides=parse_sets(sets, problem),
         quiet=quiet,
-        describe=described,
     )
     shutil.copyfile(report.summary, out / "whatif.csv")
     keys = [k for k, _ in parsed]
@@ -361,7 +454,7 @@ def whatif(
     click.echo(table(headers, rows, digits=2, right=right))
     figures = plot_outcomes(report.rows, parsed, out, simulate=not static)
     click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(figures)} in {out}")
-    _finish(report, len(cases))
+    _finish(report)
 
 
 def _yes_no(value: Any) -> str:

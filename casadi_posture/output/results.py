@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import io
 import math
 import platform
+import re
+import subprocess
 from collections import Counter
+from datetime import UTC, datetime
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -108,9 +114,6 @@ def summary(result: SimulationResult) -> dict[str, Any]:
             "ik_iterations": result.ik_iterations,
             "ik_failures": result.ik_failures,
             "ik_fallbacks": result.ik_fallbacks,
-            "wall_time_s": result.wall_time_s,
-            "ik_time_s": result.ik_time_s,
-            "share_outside_ik": 1.0 - result.ik_time_s / max(result.wall_time_s, 1e-12),
         },
     }
 
@@ -186,29 +189,49 @@ def _recoveries(result: SimulationResult) -> list[dict[str, Any]]:
     return out
 
 
-def write_results(result: SimulationResult, out: Path) -> list[Path]:
-    """Write timeline.csv, events.csv, summary.json and manifest.json into ``out``."""
+def write_results(
+    result: SimulationResult, out: Path, *, command: list[str] | None = None
+) -> list[Path]:
+    """Write timeline.csv (and timeline.parquet when pyarrow is installed), events.csv,
+    summary.json and manifest.json into ``out``; ``command`` is the command line, recorded
+    in the manifest."""
     out.mkdir(parents=True, exist_ok=True)
-    paths = [out / name for name in ("timeline.csv", "events.csv", "summary.json", "manifest.json")]
-    _write_timeline(result, paths[0])
-    with paths[1].open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["time_s", "event", "half_joint", "detail"])
-        writer.writerows([e.time_s, e.kind, e.half_joint, e.detail] for e in result.events)
-    paths[2].write_text(dumps(summary(result)) + "\n")
-    paths[3].write_text(dumps(manifest(result)) + "\n")
+    columns = timeline_columns(result)
+    paths = [out / "timeline.csv"]
+    write_table(columns, paths[0])
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        pass
+    else:
+        paths.append(out / "timeline.parquet")
+        pq.write_table(pa.table({k: list(v) for k, v in columns.items()}), str(paths[-1]))
+    paths += [out / name for name in ("events.csv", "summary.json", "manifest.json")]
+    write_table(event_columns(result), paths[-3])
+    paths[-2].write_text(dumps(summary(result)) + "\n")
+    paths[-1].write_text(dumps(manifest(result, command)) + "\n")
     return paths
 
 
-def manifest(result: SimulationResult) -> dict[str, Any]:
-    """Versions, the resolved problem and the solver options of a run."""
+def manifest(result: SimulationResult, command: list[str] | None = None) -> dict[str, Any]:
+    """How the run was made, enough to repeat it (``casadi-posture rerun``): the command line,
+    the overrides, the problem's data after them and its file's SHA-256, the solver and
+    constraint settings, the versions, the time and, in a git checkout, the commit; the
+    resolved model; and the run's wall times."""
     problem = result.problem
     return {
-        "package": {"name": "casadi_posture", "version": __version__},
+        "created_utc": datetime.now(UTC).isoformat(timespec="seconds"),
+        "command": command,
+        "package": {"name": "casadi_posture", "version": __version__, "git": git_commit()},
         "casadi": ca.__version__,
         "ipopt": ipopt_version(),
         "numpy": np.__version__,
         "python": platform.python_version(),
+        "problem_path": str(problem.path),
+        "problem_sha256": problem.text_sha256,
+        "overrides": problem.overrides,
+        "problem_data": problem.data,
         "solver": result.solver,
         "solver_options": problem.spec.solver.model_dump(),
         "recovery_law": problem.fatigue.settings(),
@@ -217,41 +240,98 @@ def manifest(result: SimulationResult) -> dict[str, Any]:
             **result.settings.__dict__,
             "max_step_deg": math.degrees(result.settings.max_step),
         },
-        "problem": description(problem),
+        "timing": {
+            "wall_time_s": result.wall_time_s,
+            "ik_time_s": result.ik_time_s,
+            "share_outside_ik": 1.0 - result.ik_time_s / max(result.wall_time_s, 1e-12),
+        },
+        "resolved_problem": description(problem),
     }
 
 
+@cache
 def ipopt_version() -> str:
-    """The version of the IPOPT library shipped with CasADi, from its file name (Linux)."""
-    names = sorted(p.name for p in Path(ca.__file__).parent.glob("libipopt.so.*.*.*"))
-    return names[-1].removeprefix("libipopt.so.") if names else "unknown"
+    """The version of IPOPT as CasADi's own IPOPT reports it in its banner."""
+    x = ca.SX.sym("x")
+    options = {"print_time": False, "ipopt": {"print_level": 5, "sb": "no", "max_iter": 0}}
+    banner = io.StringIO()
+    with contextlib.redirect_stdout(banner):
+        ca.nlpsol("version", "ipopt", {"x": x, "f": x * x}, options)(x0=0.0)
+    found = re.search(r"Ipopt version ([0-9][0-9.]*)", banner.getvalue())
+    return found.group(1) if found else "unknown"
 
 
-def _write_timeline(result: SimulationResult, path: Path) -> None:
+@cache
+def git_commit() -> dict[str, Any] | None:
+    """The commit of the package's source, when it runs from a git checkout (else None)."""
+    here = Path(__file__).resolve().parent
+    try:
+        head = subprocess.run(
+            ["git", "-C", str(here), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return {"commit": head, "uncommitted_changes": bool(dirty)}
+
+
+def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
+    """The timeline as named columns in the files' units (degrees, N·m, %MVC, s); the
+    header of timeline.csv and the columns of :func:`timeline_frame`. Empty cells
+    (None): no constraint owner, goal or case on that step."""
     tl, body = result.timeline, result.problem.body
-    dofs, halves = body.dof_names, [h.name for h in body.half_joints]
-    levels = result.level_units
-    header = ["time_s", *[f"{d}_deg" for d in dofs], *[f"{result.effector}_{a}_m" for a in "xyz"]]
-    header += [] if tl.along_line is None else [f"{result.effector}_along_line_m"]
-    for kind in ("active", "passive", "external"):
-        header += [f"tau_{kind}_{d}_Nm" for d in dofs]
-    header += [f"load_{h}_pct_mvc" for h in halves] + [f"fatigue_{h}" for h in halves]
-    header += [f"fatigued_{h}" for h in halves]
-    header += ["constraint_owner", "goal_angle_deg", "goal_case"]
-    header += [f"residual_level{k + 1}_{u.replace(', ', '_')}" for k, u in enumerate(levels)]
-    header += ["ik_solver"]
+    halves = [h.name for h in body.half_joints]
+    columns: dict[str, list[Any]] = {"time_s": tl.time.tolist()}
+    for i, dof in enumerate(body.dof_names):
+        columns[f"{dof}_deg"] = np.degrees(tl.q[:, i]).tolist()
+    for a, axis in enumerate("xyz"):
+        columns[f"{result.effector}_{axis}_m"] = tl.effector[:, a].tolist()
+    if tl.along_line is not None:
+        columns[f"{result.effector}_along_line_m"] = tl.along_line.tolist()
+    for kind, values in (("active", tl.active), ("passive", tl.passive), ("external", tl.external)):
+        for i, dof in enumerate(body.dof_names):
+            columns[f"tau_{kind}_{dof}_Nm"] = values[:, i].tolist()
+    for k, half in enumerate(halves):
+        columns[f"load_{half}_pct_mvc"] = tl.load[:, k].tolist()
+    for k, half in enumerate(halves):
+        columns[f"fatigue_{half}"] = tl.fatigue[:, k].tolist()
+    for k, half in enumerate(halves):
+        columns[f"fatigued_{half}"] = [int(v) for v in tl.fatigued[:, k]]
+    columns["constraint_owner"] = [halves[o] if o >= 0 else None for o in tl.owner]
+    columns["goal_angle_deg"] = [None if math.isnan(g) else math.degrees(g) for g in tl.goal]
+    columns["goal_case"] = [c or None for c in tl.case]
+    for k, unit in enumerate(result.level_units):
+        columns[f"residual_level{k + 1}_{unit.replace(', ', '_')}"] = tl.residuals[:, k].tolist()
+    columns["ik_solver"] = list(tl.solver)
+    return columns
+
+
+def event_columns(result: SimulationResult) -> dict[str, list[Any]]:
+    """The events as named columns (events.csv)."""
+    return {
+        "time_s": [e.time_s for e in result.events],
+        "event": [e.kind for e in result.events],
+        "half_joint": [e.half_joint for e in result.events],
+        "detail": [e.detail for e in result.events],
+    }
+
+
+def write_table(columns: dict[str, list[Any]], path: Path) -> None:
+    """A CSV of named columns: floats to 10 significant digits, None as an empty cell."""
     with path.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
-        writer.writerow(header)
-        for i, t in enumerate(tl.time):
-            row = [t, *np.degrees(tl.q[i]), *tl.effector[i]]
-            row += [] if tl.along_line is None else [tl.along_line[i]]
-            row += [*tl.active[i], *tl.passive[i], *tl.external[i], *tl.load[i], *tl.fatigue[i]]
-            row += [int(v) for v in tl.fatigued[i]]
-            row += [
-                halves[tl.owner[i]] if tl.owner[i] >= 0 else "",
-                "" if math.isnan(tl.goal[i]) else math.degrees(tl.goal[i]),
-                tl.case[i],
-            ]
-            row += [*tl.residuals[i], tl.solver[i]]
-            writer.writerow([f"{v:.10g}" if isinstance(v, float | np.floating) else v for v in row])
+        writer.writerow(columns)
+        for row in zip(*columns.values(), strict=True):
+            writer.writerow(
+                ["" if v is None else f"{v:.10g}" if isinstance(v, float) else v for v in row]
+            )

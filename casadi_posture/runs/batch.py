@@ -20,7 +20,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
-import math
 import multiprocessing
 import os
 import shutil
@@ -38,11 +37,11 @@ from tqdm import tqdm
 
 from casadi_posture import __version__, interrupt
 from casadi_posture.errors import MISSING, CasadiPostureError, ProblemError
-from casadi_posture.ik.result import ACHIEVED_TOLERANCE
-from casadi_posture.ik.solvers import make_solver
+from casadi_posture.frames import frame
 from casadi_posture.output.plain import dumps, plain
+from casadi_posture.output.rows import static_row
 from casadi_posture.problem import Problem, load_problem, read_problem_text
-from casadi_posture.static import STRENGTH_PCT_MVC, group_loads, rule
+from casadi_posture.static import rule, solve
 
 CASES = "cases"
 ROW = "row.json"
@@ -109,14 +108,15 @@ class Outcome:
 
 @dataclass(frozen=True)
 class BatchReport:
-    """The rows of every case in the output folder, sorted by case; how many cases ran now
-    and how many were already done; whether Ctrl-C stopped the run (the finished cases are
-    kept)."""
+    """The rows of every case in the output folder, sorted by case; how many cases ran now,
+    how many were already done, and how many the run has; whether Ctrl-C stopped it (the
+    finished cases are kept)."""
 
     rows: list[dict[str, Any]]
     ran: int
     skipped: int
     summary: Path
+    total: int
     interrupted: bool = False
 
     def with_status(self, *status: Status) -> list[dict[str, Any]]:
@@ -125,6 +125,10 @@ class BatchReport:
     @property
     def failed(self) -> list[dict[str, Any]]:
         return self.with_status("failed")
+
+    def to_frame(self) -> object:
+        """One row per case as a pandas DataFrame (the columns of summary.csv)."""
+        return frame([{k: plain(v) for k, v in row.items()} for row in self.rows])
 
 
 def cases_from_paths(paths: Sequence[str | Path], solver: str | None = None) -> list[Case]:
@@ -180,7 +184,7 @@ def run_case(case: Case) -> Outcome:
         if case.simulate:
             outcomes, files = _simulate(problem, case.solver)
         else:
-            outcomes = static_outcomes(problem, case.solver)
+            outcomes = static_row(solve(problem, case.solver))
         flags = outcomes.pop("flags")
         status = "flagged" if flags else "ok"
         return Outcome(case.name, {**row, **outcomes, "status": status, "flags": flags}, files)
@@ -201,104 +205,19 @@ def one_line(text: str) -> str:
     return line if len(line) <= REASON_CHARACTERS else line[: REASON_CHARACTERS - 3] + "..."
 
 
-def static_outcomes(problem: Problem, solver: str | None) -> dict[str, Any]:
-    """Outcomes from torques alone at the solved start posture: whether level 1 was reached,
-    each half-joint's load and endurance, the limiting group, and the flags."""
-    q, flags, columns = problem.posture, [], {}
-    if problem.tasks:
-        name = solver or problem.spec.solver.name
-        hierarchy = problem.hierarchy()
-        result = make_solver(name, hierarchy, problem.spec.solver).solve(q)
-        q = result.q
-        unit = hierarchy.level_units()[0]
-        columns = _reach_columns(result.achieved[0], float(result.residuals[0]), unit)
-        if not result.success:
-            flags.append(f"the {name} solver failed: {result.status}")
-        if not result.achieved[0]:
-            flags.append(
-                f"level 1 not reached: residual {result.residuals[0]:.3g} {unit} > "
-                f"{ACHIEVED_TOLERANCE:g} {unit}"
-            )
-    groups = group_loads(problem, problem.torque_model().evaluate(q))
-    over = [g.name for g in groups if g.over_strength]
-    if over:
-        flags.append(f"over strength at the start: {', '.join(over)}")
-    start = {g.name: (g.load_pct_mvc, g.endurance_s) for g in groups}
-    return columns | _endurance_columns(start) | {"flags": "; ".join(flags)}
-
-
-def _reach_columns(reached: bool, residual: float, unit: str) -> dict[str, Any]:
-    return {"reached": reached, f"residual_level1_{unit.replace(', ', '_')}": residual}
-
-
-def _endurance_columns(groups: dict[str, tuple[float, float]]) -> dict[str, Any]:
-    """Columns of each half-joint's start load [%MVC] and endurance [min] (empty: unlimited),
-    the groups over strength, and the limiting group at the start: the one with the shortest
-    endurance (empty when no group tires)."""
-    row: dict[str, Any] = {}
-    for name, (load, seconds) in groups.items():
-        row[f"initial_load_{name}_pct_mvc"] = load
-        row[f"initial_endurance_{name}_min"] = seconds / 60
-    tiring = [name for name, (load, seconds) in groups.items() if math.isfinite(seconds)]
-    limiting = min(tiring, key=lambda n: (groups[n][1], -groups[n][0]), default=None)
-    over = [name for name, (load, _) in groups.items() if load > STRENGTH_PCT_MVC]
-    return row | {
-        "over_strength_at_start": "+".join(over),
-        "limiting_group_at_start": limiting or "",
-        "limiting_endurance_at_start_min": None if limiting is None else groups[limiting][1] / 60,
-    }
-
-
 def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dict[str, bytes]]:
     from casadi_posture.output.plots import plot_simulation
-    from casadi_posture.output.results import summary, write_results
+    from casadi_posture.output.results import write_results
+    from casadi_posture.output.rows import simulation_row
     from casadi_posture.simulation import simulate
 
     result = simulate(problem, solver)
     if result.stop == "interrupted":
         raise KeyboardInterrupt
-    report = summary(result)
     with tempfile.TemporaryDirectory() as folder:
         written = write_results(result, Path(folder)) + plot_simulation(result, Path(folder))
         files = {p.name: p.read_bytes() for p in written}
-    task, first, exhausted = report["task"], report["first_to_fatigue"], report["exhausted_group"]
-    start = {
-        g["half_joint"]: (
-            g["initial_load_pct_mvc"],
-            math.inf if g["initial_endurance_min"] is None else 60 * g["initial_endurance_min"],
-        )
-        for g in report["half_joints"]
-    }
-    row: dict[str, Any] = (
-        _reach_columns(task["held_at_start"], task["level1_residual_at_start"], task["level1_unit"])
-        | _endurance_columns(start)
-        | {
-            "simulated_s": report["simulated_s"],
-            "stop": report["stop"],
-            "first_to_fatigue": first["half_joint"] if first else "",
-            "first_fatigue_s": first["time_s"] if first else None,
-            "exhausted_group": exhausted["half_joint"] if exhausted else "",
-            "exhausted_s": exhausted["time_s"] if exhausted else None,
-            "fatigue_recovery_cycles": report["fatigue_recovery_cycles"],
-            "task_held_s": task["held_s"],
-            "task_held_is_lower_bound": task["held_s_is_lower_bound"],
-            "task_lost_reason": task["lost"]["reason"] if task["lost"] else "",
-            "ik_failures": report["solver_statistics"]["ik_failures"],
-            "ik_fallbacks": report["solver_statistics"]["ik_fallbacks"],
-            "flags": "; ".join(report["flags"]),
-        }
-    )
-    for group in report["half_joints"]:
-        row[f"fatigue_threshold_{group['half_joint']}_s"] = group["first_fatigue_threshold_s"]
-    recoveries = report["recovery_postures"]
-    recovery = recoveries[0] if recoveries else None
-    row["recovery_s"] = recovery["time_s"] if recovery else None
-    for dof in problem.body.dof_names:
-        row[f"recovery_{dof}_deg"] = recovery["posture_deg"][dof] if recovery else None
-    position = recovery["effector_m"] if recovery else [None] * 3
-    for axis, value in zip("xyz", position, strict=True):
-        row[f"recovery_{result.effector}_{axis}_m"] = value
-    return row, files
+    return simulation_row(result), files
 
 
 def run_batch(
@@ -356,7 +275,7 @@ def run_batch(
     bar.close()
     rows = sorted((_row(p) for p in folder.iterdir() if _is_case(p)), key=lambda r: r["case"])
     summary = write_summary(rows, out)
-    return BatchReport(rows, ran, len(cases) - len(todo), summary, interrupted)
+    return BatchReport(rows, ran, len(cases) - len(todo), summary, len(cases), interrupted)
 
 
 def _is_case(path: Path) -> bool:

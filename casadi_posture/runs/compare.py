@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from casadi_posture.frames import frame
 from casadi_posture.ik.result import IKResult
 from casadi_posture.ik.solvers import make_solver
 from casadi_posture.problem import Problem
@@ -29,6 +30,10 @@ class Comparison:
     max_joint_difference_deg: float
     agree: bool
     verdict: str
+
+    def to_frame(self) -> object:
+        """One row per priority level as a pandas DataFrame (the columns of compare.csv)."""
+        return frame(rows(self))
 
 
 def compare(problem: Problem) -> Comparison:

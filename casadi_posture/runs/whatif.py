@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -70,8 +69,12 @@ def grid(
     solver: str | None,
     simulate: bool,
     max_cases: int = MAX_CASES,
+    paired: bool = False,
+    base: Mapping[str, Any] | None = None,
 ) -> list[Case]:
-    """One case per combination of the varied values; ``solver`` may be varied too.
+    """One case per combination of the varied values (with ``paired``, one per position:
+    the i-th value of every key together, all lists of one length); ``solver`` may be
+    varied too; ``base`` overrides apply to every case first.
 
     Every combination is validated like a problem file before anything runs, so a bad
     key or value is one error, not a failed case per combination.
@@ -79,7 +82,15 @@ def grid(
     keys = [k for k, _ in varies]
     if len(set(keys)) != len(keys):
         raise ProblemError(problem, "--vary", keys, "each key varied once")
-    count = math.prod(len(values) for _, values in varies)
+    lengths = {len(values) for _, values in varies}
+    if paired and len(lengths) > 1:
+        raise ProblemError(problem, "--vary", sorted(lengths), "lists of one length with --paired")
+    combos = (
+        list(zip(*(values for _, values in varies), strict=True))
+        if paired
+        else list(itertools.product(*(values for _, values in varies)))
+    )
+    count = len(combos)
     if count > max_cases:
         raise ProblemError(
             problem,
@@ -93,8 +104,8 @@ def grid(
             raise ProblemError(problem, "--vary solver", unknown[0], f"one of {SOLVER_NAMES}")
     text = read_problem_text(problem)
     cases = []
-    for combo in itertools.product(*(values for _, values in varies)):
-        chosen = dict(zip(keys, combo, strict=True))
+    for combo in combos:
+        chosen = dict(base or {}) | dict(zip(keys, combo, strict=True))
         case_solver = chosen.pop("solver", solver)
         name = safe_name("__".join(f"{k}={v}" for k, v in zip(keys, combo, strict=True)))
         try:

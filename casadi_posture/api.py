@@ -1,0 +1,239 @@
+"""The Python API: load a problem, look at it, solve it, simulate it, compare the solvers,
+run what-if grids and batches. The command line is a thin layer over these functions.
+
+Every result is a small named type whose data turns into a pandas DataFrame in one call
+(``to_frame()``; pandas is an optional extra), with the columns and units of the files:
+degrees, N·m, %MVC, s.
+
+    >>> import casadi_posture as cp
+    >>> problem = cp.load("problems/holding_m45.toml", {"loads[0].mass_kg": 5.0})
+    >>> answer = cp.solve(problem)
+    >>> answer.limiting.name, round(answer.limiting.endurance_min, 2)
+    ('shoulder_flexors', 1.46)
+"""
+
+from __future__ import annotations
+
+import shutil
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from casadi_posture.describe import description
+from casadi_posture.errors import MISSING, ProblemError
+from casadi_posture.frames import frame
+from casadi_posture.output.plots import plot_simulation
+from casadi_posture.output.results import (
+    event_columns,
+    summary,
+    timeline_columns,
+    write_results,
+)
+from casadi_posture.output.rows import simulation_row
+from casadi_posture.problem import Problem, load_problem, problem_from_data
+from casadi_posture.runs import compare as comparison
+from casadi_posture.runs.batch import BatchReport, cases_from_paths, run_batch
+from casadi_posture.runs.whatif import MAX_CASES, describe_grid, grid
+from casadi_posture.simulation import SimulationResult
+from casadi_posture.simulation import simulate as run_simulation
+from casadi_posture.static import StaticAnswer, at_posture
+from casadi_posture.static import solve as solve_static
+
+
+def load(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
+    """A problem file, validated and resolved; ``overrides`` set dotted keys first
+    (``{"loads[0].mass_kg": 5.0, "fatigue.strategy": "passive"}``). Bad input raises
+    :class:`ProblemError` naming the file, the key, the value and what was expected."""
+    return load_problem(path, overrides)
+
+
+def loads(text: str, name: str = "<text>", overrides: Mapping[str, Any] | None = None) -> Problem:
+    """A problem from TOML text; ``name`` names it in messages."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ProblemError(name, None, None, f"valid TOML ({error})") from None
+    return from_dict(data, name, overrides)
+
+
+def from_dict(
+    data: Mapping[str, Any], name: str = "<dict>", overrides: Mapping[str, Any] | None = None
+) -> Problem:
+    """A problem from plain data: the tables of a problem file as a dict."""
+    return problem_from_data(data, name, overrides)
+
+
+def describe(problem: Problem) -> dict[str, Any]:
+    """The resolved model as plain data: DOFs, segments, loads, tasks, every parameter with
+    its unit, source and status (what ``casadi-posture describe --json`` prints)."""
+    return description(problem)
+
+
+def torques(problem: Problem, posture_deg: Mapping[str, float] | None = None) -> StaticAnswer:
+    """Torques, loads and endurances at the problem's posture, or with some DOFs set to
+    ``posture_deg`` [deg]."""
+    if posture_deg:
+        problem = problem.with_posture(dict(posture_deg), key="posture_deg")
+    return at_posture(problem)
+
+
+def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
+    """The prioritized IK from the problem's posture (``solver``: ``"nullspace"`` or
+    ``"lexicographic"``, default the file's), with the torques at the solution;
+    ``answer.flags`` say why the answer cannot be used as it is (empty: it can)."""
+    return solve_static(problem, solver)
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A simulated hold: ``result`` holds the timeline [rad inside], the events and why it
+    stopped; the methods give it in the files' units."""
+
+    result: SimulationResult
+
+    @property
+    def stop(self) -> str:
+        """Why the run ended: completed, exhausted, never_held or interrupted."""
+        return self.result.stop
+
+    def summary(self) -> dict[str, Any]:
+        """What the run found (summary.json)."""
+        return summary(self.result)
+
+    def row(self) -> dict[str, Any]:
+        """The outcomes as one flat row, as a batch or what-if table holds them."""
+        return simulation_row(self.result)
+
+    def to_frame(self) -> Any:
+        """The timeline as a pandas DataFrame, the columns of timeline.csv."""
+        return frame(timeline_columns(self.result))
+
+    def events_frame(self) -> Any:
+        """The events as a pandas DataFrame, the columns of events.csv."""
+        return frame(event_columns(self.result))
+
+    def write(self, out: str | Path, *, figures: bool = True, force: bool = False) -> list[Path]:
+        """Write the run's files (and figures) into ``out``: a new or empty folder, or any
+        folder with ``force``."""
+        out = Path(out)
+        check_out(out, force=force, key="out")
+        written = write_results(self.result, out)
+        return written + (plot_simulation(self.result, out) if figures else [])
+
+
+def simulate(problem: Problem, solver: str | None = None) -> Simulation:
+    """Simulate holding the problem's tasks for ``simulation.duration_s``: fatigue, the
+    fatigue-reducing constraint with its hysteresis, recovery. Ctrl-C stops it between two
+    steps with the steps run so far (``stop == "interrupted"``)."""
+    return Simulation(run_simulation(problem, solver))
+
+
+def compare(problem: Problem) -> comparison.Comparison:
+    """Both IK solvers from the same start, and a verdict on whether they agree."""
+    return comparison.compare(problem)
+
+
+def whatif(
+    problem: str | Path,
+    vary: Mapping[str, Sequence[Any]],
+    out: str | Path,
+    *,
+    static: bool = False,
+    paired: bool = False,
+    solver: str | None = None,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    resume: bool = False,
+    force: bool = False,
+    max_cases: int = MAX_CASES,
+    overrides: Mapping[str, Any] | None = None,
+    quiet: bool = True,
+) -> BatchReport:
+    """A what-if study: the problem file with each combination of the ``vary`` values (a
+    full grid; with ``paired``, the i-th values of every key together), static (torques at
+    the start) or simulated, run into ``out``; ``overrides`` apply to every case first.
+    ``report.to_frame()`` is the table."""
+    varies = [(key, list(values)) for key, values in vary.items()]
+    cases = grid(
+        str(problem),
+        varies,
+        solver=solver,
+        simulate=not static,
+        max_cases=max_cases,
+        paired=paired,
+        base=overrides,
+    )
+    described = describe_grid(str(problem), varies, solver=solver, simulate=not static)
+    described |= {"paired": paired, "overrides": dict(overrides or {})}
+    out = Path(out)
+    prepare_runs(out, resume=resume, force=force)
+    return run_batch(
+        cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
+    )
+
+
+def batch(
+    problems: Sequence[str | Path],
+    out: str | Path,
+    *,
+    solver: str | None = None,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    resume: bool = False,
+    force: bool = False,
+    overrides: Mapping[str, Any] | None = None,
+    quiet: bool = True,
+) -> BatchReport:
+    """Simulate many problem files (folders give their ``*.toml``) into ``out``;
+    ``overrides`` apply to every file."""
+    given = dict(overrides or {})
+    cases = [
+        replace(case, overrides=given)
+        for case in cases_from_paths([str(p) for p in problems], solver)
+    ]
+    out = Path(out)
+    prepare_runs(out, resume=resume, force=force)
+    described = {
+        "kind": "batch",
+        "problems": [str(p) for p in problems],
+        "solver": solver,
+        "overrides": given,
+    }
+    return run_batch(
+        cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
+    )
+
+
+def check_out(out: Path, *, force: bool, key: str = "--out") -> None:
+    """The rule for every output: a new or empty folder (or a new file), unless ``force``."""
+    if str(out) in ("", "."):
+        raise ProblemError(None, key, str(out), "a folder or file name (not the current folder)")
+    if force or not out.exists():
+        return
+    if out.is_dir() and not any(out.iterdir()):
+        return
+    raise ProblemError(out, key, MISSING, "a new or empty output, or --force to overwrite it")
+
+
+def prepare_runs(out: Path, *, resume: bool, force: bool) -> None:
+    """A batch's folder: continued with ``resume``, started over with ``force`` (its earlier
+    results deleted), else it must be new or empty."""
+    if resume and force:
+        raise ProblemError(out, "--resume", MISSING, "either --resume or --force, not both")
+    if resume:
+        return
+    if force:
+        if out.exists():
+            shutil.rmtree(out)
+        return
+    try:
+        check_out(out, force=False)
+    except ProblemError:
+        raise ProblemError(
+            out,
+            "--out",
+            MISSING,
+            "a new or empty folder, --resume to continue its run or --force to start over",
+        ) from None

@@ -1,0 +1,90 @@
+"""One flat row of outcomes per case, the unit of batch summaries, what-if tables and
+DataFrames: units in the column names; None (an empty cell) for unlimited endurances,
+times that never came, and groups or reasons that do not apply."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from casadi_posture.output.results import summary
+from casadi_posture.simulation import SimulationResult
+from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer
+
+
+def static_row(answer: StaticAnswer) -> dict[str, Any]:
+    """Whether level 1 was reached, each half-joint's load [%MVC] and endurance [min], the
+    groups over strength, the limiting group and the flags (one string)."""
+    row: dict[str, Any] = {}
+    if answer.levels:
+        top = answer.levels[0]
+        row |= _reach(top.achieved, top.residual, top.unit)
+    start = {g.name: (g.load_pct_mvc, g.endurance_s) for g in answer.groups}
+    return row | _endurance(start) | {"flags": "; ".join(answer.flags)}
+
+
+def simulation_row(result: SimulationResult) -> dict[str, Any]:
+    """The start outcomes (as :func:`static_row`) and what the simulation found: when the
+    first group reached the fatigue threshold, which group was exhausted and when, the
+    cycles, how long the task was held (a lower bound when the run ended with it held),
+    the first recovery posture [deg] and its effector position [m], and the flags."""
+    report = summary(result)
+    task, first, exhausted = report["task"], report["first_to_fatigue"], report["exhausted_group"]
+    start = {
+        g["half_joint"]: (
+            g["initial_load_pct_mvc"],
+            math.inf if g["initial_endurance_min"] is None else 60 * g["initial_endurance_min"],
+        )
+        for g in report["half_joints"]
+    }
+    row: dict[str, Any] = (
+        _reach(task["held_at_start"], task["level1_residual_at_start"], task["level1_unit"])
+        | _endurance(start)
+        | {
+            "simulated_s": report["simulated_s"],
+            "stop": report["stop"],
+            "first_to_fatigue": first["half_joint"] if first else "",
+            "first_fatigue_s": first["time_s"] if first else None,
+            "exhausted_group": exhausted["half_joint"] if exhausted else "",
+            "exhausted_s": exhausted["time_s"] if exhausted else None,
+            "fatigue_recovery_cycles": report["fatigue_recovery_cycles"],
+            "task_held_s": task["held_s"],
+            "task_held_is_lower_bound": task["held_s_is_lower_bound"],
+            "task_lost_reason": task["lost"]["reason"] if task["lost"] else "",
+            "ik_failures": report["solver_statistics"]["ik_failures"],
+            "ik_fallbacks": report["solver_statistics"]["ik_fallbacks"],
+            "flags": "; ".join(report["flags"]),
+        }
+    )
+    for group in report["half_joints"]:
+        row[f"fatigue_threshold_{group['half_joint']}_s"] = group["first_fatigue_threshold_s"]
+    recoveries = report["recovery_postures"]
+    recovery = recoveries[0] if recoveries else None
+    row["recovery_s"] = recovery["time_s"] if recovery else None
+    for dof in result.problem.body.dof_names:
+        row[f"recovery_{dof}_deg"] = recovery["posture_deg"][dof] if recovery else None
+    position = recovery["effector_m"] if recovery else [None] * 3
+    for axis, value in zip("xyz", position, strict=True):
+        row[f"recovery_{result.effector}_{axis}_m"] = value
+    return row
+
+
+def _reach(reached: bool, residual: float | None, unit: str) -> dict[str, Any]:
+    return {"reached": reached, f"residual_level1_{unit.replace(', ', '_')}": residual}
+
+
+def _endurance(groups: dict[str, tuple[float | None, float]]) -> dict[str, Any]:
+    """Each half-joint's start load [%MVC] and endurance [min], the groups over strength, and
+    the limiting group at the start: the shortest endurance (empty when no group tires)."""
+    row: dict[str, Any] = {}
+    for name, (load, seconds) in groups.items():
+        row[f"initial_load_{name}_pct_mvc"] = load
+        row[f"initial_endurance_{name}_min"] = seconds / 60
+    tiring = [name for name, (_, seconds) in groups.items() if math.isfinite(seconds)]
+    limiting = min(tiring, key=lambda n: (groups[n][1], -(groups[n][0] or 0.0)), default=None)
+    over = [name for name, (load, _) in groups.items() if (load or 0.0) > STRENGTH_PCT_MVC]
+    return row | {
+        "over_strength_at_start": "+".join(over),
+        "limiting_group_at_start": limiting or "",
+        "limiting_endurance_at_start_min": None if limiting is None else groups[limiting][1] / 60,
+    }
