@@ -163,3 +163,16 @@ def test_a_violated_hard_inequality_is_reported_not_accepted() -> None:
     for solver in SOLVERS:
         result = solver(hierarchy).solve(START, impossible)
         assert not result.success, solver.name
+
+
+def test_a_level_never_ends_farther_from_its_task_than_its_feasible_start() -> None:
+    """Reproducer: on the line + plane problem, from the posture the fatigue constraint
+    released (the wrist 9e-8 m off the line), IPOPT's level 1 wandered along the line's
+    solution set and stopped "acceptable" 1e-6 m off it."""
+    hierarchy = load_problem(PROBLEMS / "line_plane_hysteresis.toml").hierarchy()
+    start = np.radians([-28.87138313, 142.69473871])
+    before = hierarchy.residual_norms(start)[0]
+    result = LexicographicSolver(hierarchy).solve(start)
+    assert result.success, result.status
+    assert before < 1e-7
+    assert result.residuals[0] <= before
