@@ -23,7 +23,7 @@ FLOORS = {
     "static": 5,
     "adjustment": 5,
     "simulation": 6,
-    "describe": 6,
+    "description": 6,
     "output": 7,
     "runs": 8,
     "api": 9,

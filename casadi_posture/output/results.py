@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture import __version__
-from casadi_posture.describe import description
+from casadi_posture.description import description
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.output.plain import dumps
 from casadi_posture.simulation import SimulationResult
