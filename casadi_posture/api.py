@@ -35,7 +35,7 @@ from casadi_posture.output.rows import simulation_row
 from casadi_posture.problem import Problem, load_problem, problem_from_data
 from casadi_posture.runs import compare as comparison
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, run_batch
-from casadi_posture.runs.whatif import MAX_CASES, describe_grid, grid
+from casadi_posture.runs.whatif import MAX_CASES, describe_grid, grid, plot_outcomes
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.simulation import simulate as run_simulation
 from casadi_posture.static import StaticAnswer, at_posture
@@ -149,12 +149,14 @@ def whatif(
     force: bool = False,
     max_cases: int = MAX_CASES,
     overrides: Mapping[str, Any] | None = None,
+    figures: bool = True,
     quiet: bool = True,
 ) -> BatchReport:
     """A what-if study: the problem file with each combination of the ``vary`` values (a
     full grid; with ``paired``, the i-th values of every key together), static (torques at
     the start) or simulated, run into ``out``; ``overrides`` apply to every case first.
-    ``report.to_frame()`` is the table."""
+    ``report.to_frame()`` is the table (also ``whatif.csv``); ``report.figures`` plot each
+    outcome against each varied key."""
     varies = [(key, list(values)) for key, values in vary.items()]
     cases = grid(
         str(problem),
@@ -169,9 +171,14 @@ def whatif(
     described |= {"paired": paired, "overrides": dict(overrides or {})}
     out = Path(out)
     prepare_runs(out, resume=resume, force=force)
-    return run_batch(
+    report = run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
     )
+    shutil.copyfile(report.summary, out / "whatif.csv")
+    if not figures:
+        return report
+    drawn = plot_outcomes(report.rows, varies, out, simulate=not static)
+    return replace(report, figures=tuple(drawn))
 
 
 def batch(

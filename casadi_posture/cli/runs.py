@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
 from pathlib import Path
 from typing import Any
 
@@ -395,7 +394,7 @@ def whatif(
       casadi-posture whatif problems/holding_m45.toml --static --paired \\
           --vary body.sex=female,male --vary body.stature_m=1.52,1.87
     """
-    from casadi_posture.runs.whatif import parse_vary, plot_outcomes
+    from casadi_posture.runs.whatif import parse_vary
 
     parsed = [parse_vary(text, problem) for text in varies]
     out = out or Path("out", "whatif", Path(problem).stem)
@@ -414,7 +413,6 @@ def whatif(
         overrides=parse_sets(sets, problem),
         quiet=quiet,
     )
-    shutil.copyfile(report.summary, out / "whatif.csv")
     keys = [k for k, _ in parsed]
     headers = [*keys, "reached", "limiting group at start", "endurance at start (min)"]
     if not static:
@@ -452,8 +450,7 @@ def whatif(
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
         click.echo(f"recovery law: {law(problem_from(problem))}\n")
     click.echo(table(headers, rows, digits=2, right=right))
-    figures = plot_outcomes(report.rows, parsed, out, simulate=not static)
-    click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(figures)} in {out}")
+    click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(report.figures)} in {out}")
     _finish(report)
 
 

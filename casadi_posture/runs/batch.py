@@ -1,4 +1,4 @@
-"""Many cases at once: in parallel, on one machine or a Dask cluster, resumable (SPEC §9).
+"""Many cases at once: in parallel, on one machine or a Dask cluster, resumable.
 
 A case is plain data (a problem file, dotted-key overrides, a solver); a worker
 rebuilds every CasADi object from it and returns plain data (a summary row and
@@ -110,7 +110,7 @@ class Outcome:
 class BatchReport:
     """The rows of every case in the output folder, sorted by case; how many cases ran now,
     how many were already done, and how many the run has; whether Ctrl-C stopped it (the
-    finished cases are kept)."""
+    finished cases are kept); the figures drawn from the rows (a what-if's outcomes)."""
 
     rows: list[dict[str, Any]]
     ran: int
@@ -118,6 +118,7 @@ class BatchReport:
     summary: Path
     total: int
     interrupted: bool = False
+    figures: tuple[Path, ...] = ()
 
     def with_status(self, *status: Status) -> list[dict[str, Any]]:
         return [r for r in self.rows if r["status"] in status]
