@@ -1,4 +1,4 @@
-"""Time simulation: hold the tasks, tire, shift to a less tiring posture, recover (SPEC §7).
+"""Time simulation: hold the tasks, tire, shift to a less tiring posture, recover (docs/model.md).
 
 Per step of simulated time: solve the IK from the last posture with the current
 fatigue constraint (the other solver takes over a step the first fails or stalls

@@ -1,4 +1,4 @@
-"""de Leva (1996) Table 4 segment inertia against the values of biomech-data.md §0.2 and §3.1."""
+"""de Leva (1996) Table 4 segment inertia against de Leva's published values."""
 
 from __future__ import annotations
 

@@ -260,7 +260,7 @@ def test_console_script_exit_code_and_no_traceback(tmp_path: Path) -> None:
 
 
 def test_a_passive_override_without_model_is_the_exponential(tmp_path: Path) -> None:
-    """The form problems/README.md documents: no 'model' key."""
+    """The form docs/problem-files.md documents: no 'model' key."""
     path = tmp_path / "override.toml"
     path.write_text(
         GOOD.replace(

@@ -1,4 +1,4 @@
-"""Endurance models against hand calculations and the biomech-data §4.1-4.3 examples."""
+"""Endurance models against hand calculations and published examples."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Fatigue models: accumulation (paper eq. 7), recovery law (biomech-data §4.5) and the 3CC-r."""
+"""Fatigue models: accumulation (paper eq. 7), the recovery laws and the 3CC-r."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The reduced active torque algorithm, case by case (SPEC §6), and its properties.
+"""The reduced active torque algorithm, case by case (paper Table 1), and its properties.
 
 Hand-built configuration: the exponential passive torque
 τp = exp(-10θ) - exp(-8(2.2 - θ)) on [-0.2, 2.6] rad, and external-torque lines

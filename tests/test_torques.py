@@ -49,7 +49,7 @@ def test_sagittal_gravity_torques_by_hand(qs_deg: float, qe_deg: float) -> None:
 
 
 def test_sanity_values_of_biomech_data() -> None:
-    """biomech-data §0.2: arm horizontal, elbow straight: 24.1 and 9.5 N·m; at 90/90: 0, 14.6."""
+    """By hand: arm horizontal, elbow straight: 24.1 and 9.5 N·m; at 90/90: 0, 14.6."""
     model = _arm().torque_model()
     straight = model.evaluate([math.pi / 2, 0.0])
     assert -straight.external == pytest.approx([24.1, 9.5], abs=0.05)
@@ -218,7 +218,7 @@ def test_active_torque_balances_and_half_joints_split_it() -> None:
 
 
 def test_default_strengths_of_biomech_data() -> None:
-    """biomech-data §2.4: 48, 33, 43, 60 N·m for the reference male."""
+    """The default strengths of the reference male: 48, 33, 43, 60 N·m (docs/sources.md)."""
     problem = _arm()
     result = problem.torque_model().evaluate(problem.posture)
     assert result.strength == pytest.approx([43.0, 60.1, 47.8, 32.9], abs=0.15)

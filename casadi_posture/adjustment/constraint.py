@@ -1,4 +1,4 @@
-"""The fatigue-reducing constraint (paper §5; SPEC §5): hysteresis per half-joint, one owner,
+"""The fatigue-reducing constraint (paper §5; docs/model.md): hysteresis per half-joint, one owner,
 and the hyperplane aᵀq ≤ b that moves the owner's joint toward a less tiring angle.
 
 While half-joint ``l`` owns the constraint, each step:

@@ -1,5 +1,5 @@
 """The reduced active torque algorithm: the goal angle of the fatigued joint (paper Tables 1–2;
-SPEC §6).
+docs/model.md).
 
 Only local knowledge of the external torque is used: along joint l,
 ``τe(θ) ≈ τe + dτe·(θ - θc)``, so the extrapolated active torque is

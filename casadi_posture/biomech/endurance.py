@@ -1,9 +1,9 @@
 """Endurance models: the maximum time a constant static load can be held, selectable by name.
 
-A load is the normalized torque ``T_N`` of a half-joint in %MVC (SPEC §2); ``f = T_N/100`` is
+A load is the normalized torque ``T_N`` of a half-joint in %MVC (docs/model.md); ``f = T_N/100`` is
 the same load as a fraction of MVC. Loads above 100 %MVC are not clipped: every model
 extrapolates its own curve there (see each class). Coefficients live in
-``data/endurance.toml`` (biomech-data §4.1-4.3).
+``data/endurance.toml`` (sources in docs/sources.md).
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
-"""Fatigue state of each half-joint over time, selectable by name (SPEC §3).
+"""Fatigue state of each half-joint over time, selectable by name (docs/model.md).
 
 Both models are vectorised over the n half-joints of a body; ``regions[i]`` is the joint
 region (``"shoulder"``, ``"elbow"``, …) of half-joint i, which selects its Frey-Law 2012
 rates. Loads are normalized torques ``T_N`` in %MVC, constant over a step of ``dt_s``
 seconds. A fatigue level of 1.0 means exhausted; the hysteresis compares it with 0.8 / 0.5.
-Parameters live in ``data/fatigue.toml`` (biomech-data §4.4-4.5).
+Parameters live in ``data/fatigue.toml`` (sources in docs/sources.md).
 """
 
 from __future__ import annotations
@@ -248,7 +248,7 @@ class ThreeCompartmentFatigue:
 
     State per half-joint: (MA, MR, MF) = active, resting, fatigued motor units [% of the pool],
     shape (n, 3), rested at (0, 100, 0). Target load ``TL = T_N`` clipped to [0, 100] %MVC
-    (biomech-data §4.4)::
+    (docs/sources.md)::
 
         C = L_D·(TL − MA)   if MA < TL and MR > TL − MA
             L_D·MR          if MA < TL and MR ≤ TL − MA

@@ -17,7 +17,7 @@ import numpy as np
 class PassiveTorque(Protocol):
     """τp(q_j) [N·m] of one DOF, monotonically decreasing in its angle q_j [rad]: a CasADi
     expression for the torque functions, and numpy values with the slope dτp/dq_j
-    [N·m/rad] for the reduced active torque algorithm (SPEC §6)."""
+    [N·m/rad] for the reduced active torque algorithm (docs/model.md)."""
 
     def expression(self, q: ca.SX) -> ca.SX: ...
 

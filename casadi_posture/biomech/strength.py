@@ -48,7 +48,7 @@ class TabulatedStrength:
 def default_strength(
     half_joint: str, *, sex: str, stature: float, body_mass: float, age: float
 ) -> tuple[ConstantStrength, Parameter]:
-    """The default strength of a half-joint (biomech-data §2.4) and its provenance.
+    """The default strength of a half-joint (docs/sources.md) and its provenance.
 
     Elbow flexors from the Harbo et al. 2012 regression at this stature [m],
     body mass [kg] and age [years]; other groups by the Gymnast strength ratio.

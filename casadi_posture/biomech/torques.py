@@ -1,4 +1,4 @@
-"""External, passive and active joint torques and half-joint loads (SPEC §2; paper eqs 1–5).
+"""External, passive and active joint torques and half-joint loads (paper eqs 1–5; docs/model.md).
 
 All torques are about the joint axis, positive in the direction of increasing
 angle. External torque by virtual work, ``τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M``;

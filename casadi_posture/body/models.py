@@ -1,4 +1,4 @@
-"""The body models the product ships, as instances of the general kinematic tree (SPEC §1, §8).
+"""The body models the product ships, as instances of the general kinematic tree (docs/model.md).
 
 World frame at the right shoulder joint centre: x forward, y to the subject's
 left, z up. Segment lengths, masses and centres of mass come in already

@@ -1,4 +1,4 @@
-"""Kinematic tree of revolute degrees of freedom as CasADi expressions (SPEC §1).
+"""Kinematic tree of revolute degrees of freedom as CasADi expressions (docs/model.md).
 
 Everything is described at the zero posture, in the world frame: each DOF by
 its joint centre and axis, each segment by its mass and centre of mass, each

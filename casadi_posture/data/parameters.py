@@ -5,8 +5,8 @@ A data file is TOML. A table holding a ``value`` key is one parameter; its
 from the nearest enclosing table that sets them, so a file states its source
 once. ``status`` is ``verified`` (read in a primary text or two independent
 transcriptions, or checked numerically) or ``estimate`` (our modelling
-choice or a single unchecked transcription); ``evidence`` keeps the finer tag
-of ``shared/reference/biomech-data.md`` ([P], [C1], [C2], [X], [E], [U]).
+choice or a single unchecked transcription); ``evidence`` keeps a finer tag ([P],
+[C1], [C2], [X], [E], [U]; ``docs/sources.md`` explains them).
 Values the user overrides in a problem file get status ``user``.
 """
 

@@ -1,5 +1,5 @@
 """The paper's IK solver: strict priorities by nullspace projection (Baerlocher & Boulic 2004;
-SPEC §4.1; ik-solvers §1).
+docs/model.md).
 
 One iteration, compiled as a single CasADi function:
 

@@ -1,4 +1,4 @@
-"""IK tasks: data plus a CasADi residual e(q, p), zero when the task is achieved (SPEC §4).
+"""IK tasks: data plus a CasADi residual e(q, p), zero when the task is achieved (docs/model.md).
 
 A task knows nothing of the solvers. Its targets are CasADi parameters ``p``
 (so a solver is built once and the targets change freely); its geometry
@@ -27,7 +27,7 @@ from casadi_posture.spec.schema import (
 from casadi_posture.spec.schema import Task as TaskSpec
 
 #: Largest task error removed per linearised iteration: 0.1 m (Buss's error clamping,
-#: ik-solvers §1.3) and 0.3 rad for angular tasks.
+#: in Buss's damped least squares) and 0.3 rad for angular tasks.
 CARTESIAN_STEP = 0.1
 ANGULAR_STEP = 0.3
 

@@ -1,4 +1,4 @@
-"""Both IK solvers on the same problem from the same start, and whether they agree (SPEC §4)."""
+"""Both IK solvers on the same problem from the same start, and whether they agree."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Ergonomics what-if queries: a grid over problem keys, run as a batch, with a table and
-plots of each outcome against each varied key (SPEC §9)."""
+plots of each outcome against each varied key."""
 
 from __future__ import annotations
 

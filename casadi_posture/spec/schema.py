@@ -1,9 +1,9 @@
-"""The problem-file format (TOML), validated with pydantic; ``problems/README.md`` documents it.
+"""The problem-file format (TOML), validated with pydantic; docs/problem-files.md documents it.
 
 Key names carry their unit (``_m``, ``_kg``, ``_deg``, ``_s``, ``_Nm``,
 ``_pct_mvc``); angles in files are degrees. Unknown keys are errors. Every number
 must be finite and within the physically meaningful range stated here and in
-``problems/README.md``: nan, inf and absurd magnitudes (a position written in
+``docs/problem-files.md``: nan, inf and absurd magnitudes (a position written in
 centimetres, a 1e308 kg load) are refused before anything is computed.
 """
 
@@ -22,7 +22,7 @@ from pydantic import (
     model_validator,
 )
 
-#: The ranges every number of a problem file must lie in (``problems/README.md``).
+#: The ranges every number of a problem file must lie in (``docs/problem-files.md``).
 MAX_POSITION_M = 10.0  # a point farther than this from the origin is a unit slip (cm, mm)
 MAX_ANGLE_DEG = 360.0
 MAX_LOAD_MASS_KG = 1000.0

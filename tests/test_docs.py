@@ -1,0 +1,117 @@
+"""The repository's documents: self-contained, and true to what the tool writes."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_no_file_refers_to_the_internal_notes() -> None:
+    """A clone has no `shared/` folder: nothing may send a reader there or to its spec."""
+    pattern = re.compile(r"shared/|\bSPEC\b|biomech-data|ik-solvers|body-3d-data")
+    offenders = []
+    for path in ROOT.rglob("*"):
+        parts = set(path.relative_to(ROOT).parts)
+        if parts & {".git", ".venv", "out", "__pycache__", ".pytest_cache"} or not path.is_file():
+            continue
+        if path.suffix not in {".py", ".toml", ".md", ".cff", ".txt", ""} or "egg-info" in str(
+            path
+        ):
+            continue
+        if path.name == "test_docs.py":
+            continue
+        for number, line in enumerate(path.read_text(errors="ignore").splitlines(), 1):
+            if pattern.search(line):
+                offenders.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()[:80]}")
+    assert not offenders, "\n".join(offenders)
+
+
+def _table(heading: str, column: int = 0) -> list[str]:
+    """The backticked names in ``column`` of the first table after ``heading`` in
+    docs/outputs.md (several per cell, comma-separated)."""
+    text = (ROOT / "docs" / "outputs.md").read_text()
+    lines = text[text.index(heading) :].splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("|"))
+    names = []
+    for line in lines[start + 2 :]:
+        if not line.startswith("|"):
+            break
+        names += re.findall(r"`([^`]+)`", line.split("|")[column + 1])
+    return names
+
+
+def _pattern(documented: str) -> re.Pattern[str]:
+    """A documented column name as a regex: ``<dof>`` stands for any name; a name starting
+    with ``_`` continues the previous one (``<effector>_x_m``, ``_y_m``)."""
+    return re.compile(
+        "^"
+        + re.sub(
+            r"<[a-z]+>", "[a-z0-9_]+", re.escape(documented).replace(r"\<", "<").replace(r"\>", ">")
+        )
+        + "$"
+    )
+
+
+def _documented_columns(heading: str) -> list[re.Pattern[str]]:
+    names, patterns = _table(heading), []
+    for name in names:
+        if name.startswith("_") and patterns:
+            stem = patterns[-1].pattern.removeprefix("^").removesuffix("$")
+            stem = stem[: stem.rfind("_", 0, stem.rfind("_"))]
+            patterns.append(re.compile(f"^{stem}{re.escape(name)}$"))
+        else:
+            patterns.append(_pattern(name))
+    return patterns
+
+
+def _undocumented(columns: list[str], patterns: list[re.Pattern[str]]) -> list[str]:
+    return [c for c in columns if not any(p.match(c) for p in patterns)]
+
+
+def _unused(columns: list[str], patterns: list[re.Pattern[str]]) -> list[str]:
+    return [p.pattern for p in patterns if not any(p.match(c) for c in columns)]
+
+
+def test_timeline_columns_and_event_kinds_are_documented(tmp_path: Path) -> None:
+    from typing import get_args
+
+    import casadi_posture as cp
+    from casadi_posture.adjustment.constraint import EventKind
+
+    problem = cp.load(ROOT / "problems" / "line_plane_hysteresis.toml")
+    run = cp.simulate(cp.load(problem.path, {"simulation.duration_s": 5.0}))
+    run.write(tmp_path / "run", figures=False)
+    header = (tmp_path / "run" / "timeline.csv").read_text().splitlines()[0].split(",")
+    patterns = _documented_columns("### `timeline.csv`")
+    assert _undocumented(header, patterns) == []
+    assert _unused(header, patterns) == []
+    assert set(_table("### `events.csv`")) == set(get_args(EventKind))
+    summary = (tmp_path / "run" / "summary.json").read_text()
+    documented = {name for cell in _table("### `summary.json`") for name in cell.split(".")}
+    import json
+
+    assert set(json.loads(summary)) <= documented
+
+
+def test_batch_summary_columns_are_documented(tmp_path: Path) -> None:
+    import casadi_posture as cp
+
+    report = cp.whatif(
+        ROOT / "problems" / "holding_m45.toml",
+        {"loads[0].mass_kg": [2.0]},
+        tmp_path / "w",
+        overrides={"simulation.duration_s": 200.0},
+    )
+    header = (tmp_path / "w" / "summary.csv").read_text().splitlines()[0].split(",")
+    varied = [c for c in header if c not in ("loads[0].mass_kg", "simulation.duration_s")]
+    patterns = _documented_columns("Columns of `summary.csv`")
+    assert report.rows[0]["status"] == "ok"
+    assert _undocumented(varied, patterns) == []
+    assert (tmp_path / "w" / "whatif.csv").read_text() == (
+        tmp_path / "w" / "summary.csv"
+    ).read_text()
+    assert sorted(p.name for p in report.figures) == sorted(
+        p.name for p in (tmp_path / "w").glob("*.png")
+    )
