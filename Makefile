@@ -6,13 +6,25 @@ DEMO_OUT ?= out/demo
 
 .PHONY: demo test lint benchmark clean
 
-$(BIN)/.installed: pyproject.toml
+# One stamp per install: the demo needs only the package; the tests add pinocchio,
+# hypothesis, pandas, pyarrow and dask; lint and the benchmarks add ruff.
+$(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(VENV)/.demo: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e .
+	touch $@
+
+$(VENV)/.test: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $@
+
+$(VENV)/.dev: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $@
 
-demo: $(BIN)/.installed
+demo: $(VENV)/.demo
 	mkdir -p $(DEMO_OUT)
 	$(BIN)/casadi-posture validate problems/*.toml
 	$(BIN)/casadi-posture simulate problems/holding_m45.toml --strategy active \
@@ -26,16 +38,16 @@ demo: $(BIN)/.installed
 		--out $(DEMO_OUT)/frontal_elbow_fig3.png
 	@echo "demo outputs in $(DEMO_OUT)/"
 
-test: $(BIN)/.installed
+test: $(VENV)/.test
 	$(BIN)/python -m pytest
 
-benchmark: $(BIN)/.installed
+benchmark: $(VENV)/.dev
 	$(BIN)/python benchmarks/solvers.py
 	$(BIN)/python benchmarks/simulation.py
 	$(BIN)/python benchmarks/whatif.py
 	$(BIN)/python benchmarks/fuzz.py --examples 600
 
-lint: $(BIN)/.installed
+lint: $(VENV)/.dev
 	$(BIN)/ruff check .
 
 clean:

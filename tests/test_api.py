@@ -1,0 +1,67 @@
+"""The public API, used as a user would: only ``import casadi_posture``."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pandas
+import pytest
+from conftest import PROBLEMS
+
+import casadi_posture as cp
+
+HOLD = PROBLEMS / "holding_m45.toml"
+
+
+def test_load_solve_simulate_frame_compare_whatif(tmp_path: Path) -> None:
+    problem = cp.load(HOLD, {"simulation.duration_s": 240.0})
+    answer = cp.solve(problem, "nullspace")
+    assert answer.reached and not answer.flags
+    assert answer.limiting.name == "shoulder_flexors"
+    groups = answer.to_frame()
+    assert list(groups.columns) == [
+        "name",
+        "dof",
+        "strength_Nm",
+        "torque_Nm",
+        "load_pct_mvc",
+        "endurance_min",
+        "verdict",
+    ]
+    assert groups.loc[0, "load_pct_mvc"] == pytest.approx(31.86, abs=0.01)
+    run = cp.simulate(problem, "nullspace")
+    timeline = run.to_frame()
+    assert timeline.shape[0] == 241 and "shoulder_flexion_deg" in timeline.columns
+    assert timeline["shoulder_flexion_deg"].iloc[0] == pytest.approx(16.8833, abs=1e-3)
+    flat = pandas.json_normalize(run.summary())
+    assert flat.shape[0] == 1 and flat.loc[0, "task.held_s"] == 240.0
+    assert pandas.DataFrame([run.row()]).shape[0] == 1
+    comparison = cp.compare(problem)
+    assert comparison.agree and list(comparison.to_frame()["level"]) == [1, 2]
+    report = cp.whatif(HOLD, {"loads[0].mass_kg": [1.0, 5.0]}, tmp_path / "w", static=True)
+    table = report.to_frame()
+    endurance = table.set_index("loads[0].mass_kg")["limiting_endurance_at_start_min"]
+    assert endurance[5.0] < endurance[1.0]
+
+
+def test_problems_from_text_and_from_dict_are_the_file() -> None:
+    text = HOLD.read_text()
+    from_file, from_text = cp.load(HOLD), cp.loads(text, "hold")
+    from_dict = cp.from_dict(tomllib.loads(text), "hold")
+    assert from_file.spec == from_text.spec == from_dict.spec
+    with pytest.raises(cp.ProblemError, match=r"^hold: loads\[0\]\.mass_kg = -1"):
+        cp.loads(text, "hold", {"loads[0].mass_kg": -1})
+
+
+def test_torques_at_a_posture_and_describe() -> None:
+    problem = cp.load(HOLD)
+    answer = cp.torques(problem, {"shoulder_flexion": 90.0, "elbow_flexion": 0.0})
+    assert answer.dofs_frame().loc[0, "external_Nm"] == pytest.approx(-24.06, abs=0.01)
+    assert cp.describe(problem)["dofs"][0]["name"] == "shoulder_flexion"
+
+
+def test_the_public_names_load_lazily() -> None:
+    assert {"load", "solve", "simulate", "whatif", "batch", "Simulation"} <= set(dir(cp))
+    with pytest.raises(AttributeError):
+        cp.nope  # noqa: B018
