@@ -21,10 +21,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
+from casadi_posture.biomech.curve import TorqueCurve, torque_curve
 from casadi_posture.description import description
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
-from casadi_posture.output.plots import plot_simulation
+from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
 from casadi_posture.output.results import (
     event_columns,
     summary,
@@ -77,6 +78,38 @@ def torques(problem: Problem, posture_deg: Mapping[str, float] | None = None) ->
     if posture_deg:
         problem = problem.with_posture(dict(posture_deg), key="posture_deg")
     return at_posture(problem)
+
+
+def curve(
+    problem: Problem, dof: str, posture_deg: Mapping[str, float] | None = None
+) -> TorqueCurve:
+    """τe, τp and τa [N·m] of ``dof`` over its whole range, the other DOFs held at the
+    problem's posture or at ``posture_deg`` [deg], and the angles where τa is zero (the
+    paper's Fig. 3). ``curve.to_frame()`` and ``curve.zeros_frame()`` give them in degrees."""
+    if posture_deg:
+        problem = problem.with_posture(dict(posture_deg), key="posture_deg")
+    if dof not in problem.body.index:
+        raise ProblemError(problem.path, "dof", dof, f"one of {problem.body.dof_names}")
+    return torque_curve(problem.torque_model(), problem.posture, dof)
+
+
+def plot_curve(
+    result: TorqueCurve, path: str | Path, *, title: str | None = None, force: bool = False
+) -> Path:
+    """Draw a :func:`curve` as the paper's Fig. 3 into ``path`` (.png, .pdf, .svg, ...):
+    a new file, or any with ``force``."""
+    path = Path(path)
+    check_figure(path, force=force, key="path")
+    return plot_torque_curve(result, path, title or f"torques over {result.dof}")
+
+
+def check_figure(path: Path, *, force: bool, key: str, source: str | Path | None = None) -> None:
+    """A figure's path: a format matplotlib writes, and the rule of every output."""
+    formats = figure_formats()
+    if path.suffix.lstrip(".").lower() not in formats:
+        expected = f"a figure file ending in one of {', '.join('.' + f for f in sorted(formats))}"
+        raise ProblemError(source, key, str(path), expected)
+    check_out(path, force=force, key=key)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:

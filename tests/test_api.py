@@ -65,3 +65,23 @@ def test_the_public_names_load_lazily() -> None:
     assert {"load", "solve", "simulate", "whatif", "batch", "Simulation"} <= set(dir(cp))
     with pytest.raises(AttributeError):
         cp.nope  # noqa: B018
+
+
+def test_curve_gives_the_zeros_of_fig3_and_draws_it(tmp_path: Path) -> None:
+    """The frontal elbow (the paper's Fig. 3): the forearm vertical at 90° needs no torque,
+    and near each limit passive tissue carries the forearm."""
+    fig3 = cp.curve(cp.load(PROBLEMS / "frontal_elbow.toml"), "elbow_flexion")
+    zeros = fig3.zeros_frame()
+    assert list(zeros["angle_deg"].round(1)) == [1.8, 90.0, 147.7]
+    assert [kind.split(":")[0] for kind in zeros["kind"]] == ["passive", "active", "passive"]
+    samples = fig3.to_frame()
+    assert list(samples.columns) == ["elbow_flexion_deg", "external_Nm", "passive_Nm", "active_Nm"]
+    assert (
+        samples["active_Nm"] + samples["passive_Nm"] + samples["external_Nm"]
+    ).abs().max() < 1e-9
+    path = cp.plot_curve(fig3, tmp_path / "fig3.png")
+    assert path.stat().st_size > 10_000
+    with pytest.raises(cp.ProblemError, match="--force"):
+        cp.plot_curve(fig3, path)
+    with pytest.raises(cp.ProblemError, match="dof = 'wrist'"):
+        cp.curve(cp.load(PROBLEMS / "frontal_elbow.toml"), "wrist")

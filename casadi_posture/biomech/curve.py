@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from casadi_posture.biomech.torques import TorqueModel
+from casadi_posture.frames import frame
 
 #: A zero of τa is "passive" (tissue near a limit carries the external torque, the paper's
 #: passive strategy) when τp there exceeds this share of the largest |τe| over the range;
@@ -34,6 +35,28 @@ class TorqueCurve:
     passive: np.ndarray
     active: np.ndarray
     zeros: tuple[ActiveZero, ...]
+
+    def to_frame(self) -> object:
+        """The samples as a pandas DataFrame: the angle [deg] and τe, τp, τa [N·m]."""
+        return frame(
+            {
+                f"{self.dof}_deg": np.degrees(self.angles),
+                "external_Nm": self.external,
+                "passive_Nm": self.passive,
+                "active_Nm": self.active,
+            }
+        )
+
+    def zeros_frame(self) -> object:
+        """The zeros of τa as a pandas DataFrame: angle [deg], τp = -τe there [N·m], and
+        what balances the joint (active: τe ≈ 0; passive: τp carries τe)."""
+        return frame(
+            {
+                "angle_deg": [float(np.degrees(z.angle)) for z in self.zeros],
+                "passive_Nm": [z.passive for z in self.zeros],
+                "kind": [z.kind for z in self.zeros],
+            }
+        )
 
 
 def torque_curve(torques: TorqueModel, q: np.ndarray, dof: str, samples: int = 1001) -> TorqueCurve:

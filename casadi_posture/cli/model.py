@@ -9,7 +9,6 @@ import click
 import numpy as np
 
 from casadi_posture import api
-from casadi_posture.biomech.curve import torque_curve
 from casadi_posture.cli.common import (
     FORCE_OPTION,
     SET_OPTION,
@@ -231,19 +230,13 @@ def curve(
     Example:
       casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion --out fig3.png
     """
-    from casadi_posture.output.plots import figure_formats, plot_torque_curve
-
     out = out or Path(f"{Path(problem).stem}-{dof}.png")
-    formats = figure_formats()
-    if out.suffix.lstrip(".").lower() not in formats:
-        expected = f"a figure file ending in one of {', '.join('.' + f for f in sorted(formats))}"
-        raise ProblemError(problem, "--out", str(out), expected)
-    api.check_out(out, force=force)
+    api.check_figure(out, force=force, key="--out", source=problem)
     resolved = problem_from(problem, postures, sets=sets)
     if dof not in resolved.body.index:
         raise ProblemError(problem, "--dof", dof, f"one of {resolved.body.dof_names}")
-    result = torque_curve(resolved.torque_model(), resolved.posture, dof)
-    plot_torque_curve(result, out, f"{Path(problem).stem}: torques over {dof}")
+    result = api.curve(resolved, dof)
+    api.plot_curve(result, out, title=f"{Path(problem).stem}: torques over {dof}", force=True)
     click.echo(f"zeros of the active torque over {dof} (other DOFs held at the problem's posture):")
     click.echo(
         table(
