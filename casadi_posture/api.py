@@ -25,6 +25,7 @@ from casadi_posture.biomech.curve import TorqueCurve, torque_curve
 from casadi_posture.description import description
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
+from casadi_posture.output.plain import plain
 from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
 from casadi_posture.output.results import (
     event_columns,
@@ -136,8 +137,9 @@ class Simulation:
         return summary(self.result)
 
     def row(self) -> dict[str, Any]:
-        """The outcomes as one flat row, as a batch or what-if table holds them."""
-        return simulation_row(self.result)
+        """The outcomes as one flat row, as a batch or what-if table holds them (None: an
+        unlimited endurance, a time that never came)."""
+        return plain(simulation_row(self.result))
 
     def to_frame(self) -> Any:
         """The timeline as a pandas DataFrame, the columns of timeline.csv."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import tomllib
 from pathlib import Path
 
@@ -36,9 +37,16 @@ def test_load_solve_simulate_frame_compare_whatif(tmp_path: Path) -> None:
     assert timeline["shoulder_flexion_deg"].iloc[0] == pytest.approx(16.8833, abs=1e-3)
     flat = pandas.json_normalize(run.summary())
     assert flat.shape[0] == 1 and flat.loc[0, "task.held_s"] == 240.0
-    assert pandas.DataFrame([run.row()]).shape[0] == 1
+    row = run.row()
+    assert pandas.DataFrame([row]).shape[0] == 1
+    numbers = [v for v in row.values() if isinstance(v, float)]
+    assert numbers and all(math.isfinite(v) for v in numbers)
+    assert row["initial_endurance_shoulder_extensors_min"] is None  # carries nothing
     comparison = cp.compare(problem)
     assert comparison.agree and list(comparison.to_frame()["level"]) == [1, 2]
+    postures = comparison.postures_frame().set_index("dof")
+    assert postures.loc["shoulder_flexion", "nullspace_deg"] == pytest.approx(16.8833, abs=1e-3)
+    assert postures["difference_deg"].abs().max() < 1e-3
     report = cp.whatif(HOLD, {"loads[0].mass_kg": [1.0, 5.0]}, tmp_path / "w", static=True)
     table = report.to_frame()
     endurance = table.set_index("loads[0].mass_kg")["limiting_endurance_at_start_min"]

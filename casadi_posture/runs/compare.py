@@ -23,6 +23,7 @@ class Comparison:
     """The two results on one problem, the largest joint difference [deg] and a verdict."""
 
     problem: str
+    dofs: list[str]
     levels: list[str]
     units: list[str]
     nullspace: IKResult
@@ -35,6 +36,19 @@ class Comparison:
         """One row per priority level as a pandas DataFrame (the columns of compare.csv)."""
         return frame(rows(self))
 
+    def postures_frame(self) -> object:
+        """One row per DOF as a pandas DataFrame: each solver's angle and their difference
+        [deg]."""
+        nullspace, lexicographic = np.degrees(self.nullspace.q), np.degrees(self.lexicographic.q)
+        return frame(
+            {
+                "dof": self.dofs,
+                "nullspace_deg": nullspace,
+                "lexicographic_deg": lexicographic,
+                "difference_deg": nullspace - lexicographic,
+            }
+        )
+
 
 def compare(problem: Problem) -> Comparison:
     """Solve ``problem`` with both solvers from its posture and explain any disagreement."""
@@ -45,6 +59,7 @@ def compare(problem: Problem) -> Comparison:
     agree, verdict = _verdict(ns, lx, difference)
     return Comparison(
         str(problem.path),
+        list(problem.body.dof_names),
         hierarchy.level_names(),
         hierarchy.level_units(),
         ns,
