@@ -24,18 +24,18 @@ $(VENV)/.dev: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $@
 
+# The demo's outputs are its own: a second run overwrites them (--force).
 demo: $(VENV)/.demo
-	mkdir -p $(DEMO_OUT)
 	$(BIN)/casadi-posture validate problems/*.toml
 	$(BIN)/casadi-posture simulate problems/holding_m45.toml --strategy active \
-		--out $(DEMO_OUT)/holding_m45-active
+		--out $(DEMO_OUT)/holding_m45-active --force
 	$(BIN)/casadi-posture simulate problems/holding_m45.toml --strategy passive \
-		--out $(DEMO_OUT)/holding_m45-passive
+		--out $(DEMO_OUT)/holding_m45-passive --force
 	$(BIN)/casadi-posture simulate problems/line_plane_hysteresis.toml \
-		--out $(DEMO_OUT)/line_plane_hysteresis
-	$(BIN)/casadi-posture compare problems/*.toml --out $(DEMO_OUT)
+		--out $(DEMO_OUT)/line_plane_hysteresis --force
+	$(BIN)/casadi-posture compare problems/*.toml --out $(DEMO_OUT)/compare --force
 	$(BIN)/casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion \
-		--out $(DEMO_OUT)/frontal_elbow_fig3.png
+		--out $(DEMO_OUT)/frontal_elbow_fig3.png --force
 	@echo "demo outputs in $(DEMO_OUT)/"
 
 test: $(VENV)/.test

@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 import re
+import shutil
+import subprocess
+import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -115,3 +120,62 @@ def test_batch_summary_columns_are_documented(tmp_path: Path) -> None:
     assert sorted(p.name for p in report.figures) == sorted(
         p.name for p in (tmp_path / "w").glob("*.png")
     )
+
+
+def _python_examples(name: str) -> list[tuple[str, str]]:
+    """Each ```python block of a document that a ```text block (its output) follows."""
+    text = (ROOT / name).read_text()
+    pattern = r"```python\n(.*?)```\n\n```text\n(.*?)```"
+    return re.findall(pattern, text, flags=re.DOTALL)
+
+
+@pytest.mark.parametrize("document", ["docs/api.md", "README.md"])
+def test_python_examples_print_what_the_documents_show(document: str, tmp_path: Path) -> None:
+    examples = _python_examples(document)
+    assert examples, f"{document} shows no Python example with its output"
+    shutil.copytree(ROOT / "problems", tmp_path / "problems")
+    for code, shown in examples:
+        (tmp_path / "example.py").write_text(code)
+        ran = subprocess.run(
+            [sys.executable, "example.py"], cwd=tmp_path, capture_output=True, text=True
+        )
+        assert ran.returncode == 0, ran.stderr
+        assert ran.stdout.rstrip() == shown.rstrip()
+
+
+def _shell_commands() -> list[str]:
+    """Every runnable casadi-posture command the documents and the --help examples show:
+    console lines, inline code and help epilogs; synopses with placeholders (PROBLEM,
+    KEY=VALUE, [--json]) are not commands."""
+    from click.testing import CliRunner
+
+    from casadi_posture.cli import main
+
+    texts = [p.read_text() for p in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]]
+    texts += [
+        CliRunner().invoke(main, [name, "--help"]).output.replace("\\\n", " ")
+        for name in main.commands
+    ]
+    found = []
+    for text in texts:
+        found += re.findall(r"^\$ (casadi-posture [^\n]+)", text, flags=re.MULTILINE)
+        found += [" ".join(c.split()) for c in re.findall(r"`(casadi-posture [^`]+)`", text)]
+        found += re.findall(r"^ +(casadi-posture [^\n]+)", text, flags=re.MULTILINE)
+    return sorted({c for c in found if not re.search(r"\b[A-Z]{3,}\b|\.\.\.", c)})
+
+
+def test_shell_examples_survive_failglob_and_zsh(tmp_path: Path) -> None:
+    """Copied into bash with failglob or into zsh, no example fails on an unquoted pattern
+    (``--vary loads[0].mass_kg=1`` matches no file: "no matches found")."""
+    shutil.copytree(ROOT / "problems", tmp_path / "problems")
+    shells = [["bash", "-O", "failglob", "-c"]]
+    if shutil.which("zsh"):
+        shells.append(["zsh", "-c"])
+    commands = _shell_commands()
+    assert len(commands) > 10
+    for shell in shells:
+        for command in commands:
+            ran = subprocess.run(
+                [*shell, f"printf '%s\\n' {command}"], cwd=tmp_path, capture_output=True
+            )
+            assert ran.returncode == 0, f"{shell[0]}: {command}: {ran.stderr.decode()}"

@@ -191,7 +191,7 @@ SET_OPTION = click.option(
     multiple=True,
     metavar="KEY=VALUE",
     help="Set a problem key before validation (repeatable): fatigue.strategy=passive, "
-    "loads[0].mass_kg=5.",
+    "'loads[0].mass_kg=5' (quoted: shells read [0] as a pattern).",
 )
 FORCE_OPTION = click.option(
     "--force", is_flag=True, help="Overwrite the output if it exists (otherwise refused)."

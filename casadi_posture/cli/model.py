@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 import numpy as np
+from click.shell_completion import CompletionItem
 
 from casadi_posture import api
 from casadi_posture.cli.common import (
@@ -22,8 +23,16 @@ from casadi_posture.errors import ProblemError
 from casadi_posture.output.report import table
 
 
+def _templates_or_files(
+    ctx: click.Context, param: click.Parameter, incomplete: str
+) -> list[CompletionItem]:
+    """Shell completion of init's first argument: the template names, then files."""
+    names = [CompletionItem(name) for name in TEMPLATES if name.startswith(incomplete)]
+    return [*names, CompletionItem(incomplete, type="file")]
+
+
 @main.command()
-@click.argument("template_or_file")
+@click.argument("template_or_file", shell_complete=_templates_or_files)
 @click.argument("file", required=False, type=click.Path(dir_okay=False, path_type=Path))
 @FORCE_OPTION
 def init(template_or_file: str, file: Path | None, force: bool) -> None:

@@ -333,7 +333,8 @@ def _finish(report: Any) -> None:
     multiple=True,
     required=True,
     metavar="KEY=V1,V2,...",
-    help="A problem key and its values (repeatable): loads[0].mass_kg=2.5,5, "
+    help="A problem key and its values (repeatable): 'loads[0].mass_kg=2.5,5' (quoted: "
+    "shells read [0] as a pattern), "
     "fatigue.strategy=active,passive, body.sex=male,female, solver=...",
 )
 @click.option(
