@@ -14,6 +14,7 @@ degrees, N·m, %MVC, s.
 
 from __future__ import annotations
 
+import hashlib
 import shutil
 import tomllib
 from collections.abc import Mapping, Sequence
@@ -25,6 +26,7 @@ from casadi_posture.biomech.curve import TorqueCurve, torque_curve
 from casadi_posture.description import description
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
+from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.plain import plain
 from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
 from casadi_posture.output.results import (
@@ -34,10 +36,16 @@ from casadi_posture.output.results import (
     write_results,
 )
 from casadi_posture.output.rows import simulation_row
-from casadi_posture.problem import Problem, load_problem, problem_from_data
+from casadi_posture.problem import Problem, load_problem, problem_from_data, read_problem_text
 from casadi_posture.runs import compare as comparison
-from casadi_posture.runs.batch import BatchReport, cases_from_paths, run_batch
-from casadi_posture.runs.whatif import MAX_CASES, describe_grid, grid, plot_outcomes
+from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
+from casadi_posture.runs.whatif import (
+    MAX_CASES,
+    WHATIF_OUTPUTS,
+    describe_grid,
+    grid,
+    plot_outcomes,
+)
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.simulation import simulate as run_simulation
 from casadi_posture.static import StaticAnswer, at_posture
@@ -117,6 +125,7 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
     """The prioritized IK from the problem's posture (``solver``: ``"nullspace"`` or
     ``"lexicographic"``, default the file's), with the torques at the solution;
     ``answer.flags`` say why the answer cannot be used as it is (empty: it can)."""
+    check_solver(solver, problem.path)
     return solve_static(problem, solver)
 
 
@@ -127,14 +136,18 @@ class Simulation:
 
     result: SimulationResult
 
+    def __repr__(self) -> str:
+        return f"Simulation({self.result!r})"
+
     @property
     def stop(self) -> str:
         """Why the run ended: completed, exhausted, never_held or interrupted."""
         return self.result.stop
 
     def summary(self) -> dict[str, Any]:
-        """What the run found (summary.json)."""
-        return summary(self.result)
+        """What the run found, as summary.json holds it (None: an unlimited endurance, a
+        time that never came)."""
+        return plain(summary(self.result))
 
     def row(self) -> dict[str, Any]:
         """The outcomes as one flat row, as a batch or what-if table holds them (None: an
@@ -162,6 +175,7 @@ def simulate(problem: Problem, solver: str | None = None) -> Simulation:
     """Simulate holding the problem's tasks for ``simulation.duration_s``: fatigue, the
     fatigue-reducing constraint with its hysteresis, recovery. Ctrl-C stops it between two
     steps with the steps run so far (``stop == "interrupted"``)."""
+    check_solver(solver, problem.path)
     return Simulation(run_simulation(problem, solver))
 
 
@@ -171,7 +185,7 @@ def compare(problem: Problem) -> comparison.Comparison:
 
 
 def whatif(
-    problem: str | Path,
+    problem: str | Path | Problem,
     vary: Mapping[str, Sequence[Any]],
     out: str | Path,
     *,
@@ -187,25 +201,32 @@ def whatif(
     figures: bool = True,
     quiet: bool = True,
 ) -> BatchReport:
-    """A what-if study: the problem file with each combination of the ``vary`` values (a
-    full grid; with ``paired``, the i-th values of every key together), static (torques at
-    the start) or simulated, run into ``out``; ``overrides`` apply to every case first.
+    """A what-if study: the problem with each combination of the ``vary`` values (a full
+    grid; with ``paired``, the i-th values of every key together), static (torques at the
+    start) or simulated, run into ``out``; ``overrides`` apply to every case first.
     ``report.to_frame()`` is the table (also ``whatif.csv``); ``report.figures`` plot each
-    outcome against each varied key."""
+    outcome against each varied key.
+
+    ``problem`` is a file, or a :class:`Problem` loaded from one (its overrides are kept):
+    every case is rebuilt from the file where it runs. With ``jobs`` > 1 a script must
+    start its work under ``if __name__ == "__main__":`` (worker processes import it)."""
+    path, given = _problem_file(problem, overrides)
+    if not vary:
+        raise ProblemError(path, "vary", MISSING, "at least one key to vary")
     varies = [(key, list(values)) for key, values in vary.items()]
     cases = grid(
-        str(problem),
+        path,
         varies,
         solver=solver,
         simulate=not static,
         max_cases=max_cases,
         paired=paired,
-        base=overrides,
+        base=given,
     )
-    described = describe_grid(str(problem), varies, solver=solver, simulate=not static)
-    described |= {"paired": paired, "overrides": dict(overrides or {})}
+    described = describe_grid(path, varies, solver=solver, simulate=not static)
+    described |= {"paired": paired, "overrides": given}
     out = Path(out)
-    prepare_runs(out, resume=resume, force=force)
+    prepare_runs(out, resume=resume, force=force, inputs=[path], outputs=WHATIF_OUTPUTS)
     report = run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
     )
@@ -217,7 +238,7 @@ def whatif(
 
 
 def batch(
-    problems: Sequence[str | Path],
+    problems: str | Path | Sequence[str | Path],
     out: str | Path,
     *,
     solver: str | None = None,
@@ -228,30 +249,51 @@ def batch(
     overrides: Mapping[str, Any] | None = None,
     quiet: bool = True,
 ) -> BatchReport:
-    """Simulate many problem files (folders give their ``*.toml``) into ``out``;
-    ``overrides`` apply to every file."""
+    """Simulate many problem files (a file, a folder of ``*.toml`` files, or a list of
+    both) into ``out``; ``overrides`` apply to every file. With ``jobs`` > 1 a script
+    must start its work under ``if __name__ == "__main__":``."""
+    paths = [str(problems)] if isinstance(problems, str | Path) else [str(p) for p in problems]
     given = dict(overrides or {})
-    cases = [
-        replace(case, overrides=given)
-        for case in cases_from_paths([str(p) for p in problems], solver)
-    ]
+    cases = [replace(case, overrides=given) for case in cases_from_paths(paths, solver)]
     out = Path(out)
-    prepare_runs(out, resume=resume, force=force)
-    described = {
-        "kind": "batch",
-        "problems": [str(p) for p in problems],
-        "solver": solver,
-        "overrides": given,
-    }
+    prepare_runs(out, resume=resume, force=force, inputs=[case.problem for case in cases])
+    described = {"kind": "batch", "problems": paths, "solver": solver, "overrides": given}
     return run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
     )
 
 
+def _problem_file(
+    problem: str | Path | Problem, overrides: Mapping[str, Any] | None
+) -> tuple[str, dict[str, Any]]:
+    """The file a what-if runs from, and the overrides every case starts with: a
+    :class:`Problem` stands for its file and its own overrides, if the file still holds
+    the text it was loaded from."""
+    if not isinstance(problem, Problem):
+        return str(problem), dict(overrides or {})
+    path = problem.path
+    unchanged = path.is_file() and problem.text_sha256 == _sha256(path)
+    if not unchanged:
+        raise ProblemError(
+            path,
+            "problem",
+            MISSING,
+            "a problem file, or a Problem loaded from a file that has not changed since",
+        )
+    return str(path), dict(problem.overrides) | dict(overrides or {})
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(read_problem_text(path).encode()).hexdigest()
+
+
 def check_out(out: Path, *, force: bool, key: str = "--out") -> None:
-    """The rule for every output: a new or empty folder (or a new file), unless ``force``."""
-    if str(out) in ("", "."):
-        raise ProblemError(None, key, str(out), "a folder or file name (not the current folder)")
+    """The rule for every output: a new or empty folder (or a new file), unless ``force``;
+    never the current folder or one that holds it."""
+    here = Path.cwd().resolve()
+    if str(out) in ("", ".") or out.resolve() in (here, *here.parents):
+        expected = "a folder or file name (not the current folder or one that holds it)"
+        raise ProblemError(None, key, str(out), expected)
     if force or not out.exists():
         return
     if out.is_dir() and not any(out.iterdir()):
@@ -259,16 +301,30 @@ def check_out(out: Path, *, force: bool, key: str = "--out") -> None:
     raise ProblemError(out, key, MISSING, "a new or empty output, or --force to overwrite it")
 
 
-def prepare_runs(out: Path, *, resume: bool, force: bool) -> None:
-    """A batch's folder: continued with ``resume``, started over with ``force`` (its earlier
-    results deleted), else it must be new or empty."""
+def prepare_runs(
+    out: Path,
+    *,
+    resume: bool,
+    force: bool,
+    inputs: Sequence[str | Path] = (),
+    outputs: Sequence[str] = (),
+) -> None:
+    """A batch's folder: continued with ``resume``, started over with ``force`` (the
+    earlier run's files deleted: its cases, ``run.json``, its summary and the names or
+    patterns in ``outputs``, nothing else), else new or empty. It may hold none of the
+    ``inputs`` (the problem files)."""
     if resume and force:
         raise ProblemError(out, "--resume", MISSING, "either --resume or --force, not both")
+    check_out(out, force=True)
+    inside = [p for p in map(Path, inputs) if out.resolve() in Path(p).resolve().parents]
+    if inside:
+        raise ProblemError(
+            out, "--out", MISSING, f"a folder apart from the problem files (it holds {inside[0]})"
+        )
     if resume:
         return
     if force:
-        if out.exists():
-            shutil.rmtree(out)
+        clear_run(out, outputs)
         return
     try:
         check_out(out, force=False)

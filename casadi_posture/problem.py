@@ -75,6 +75,13 @@ class Problem:
     overrides: dict[str, Any] = field(default_factory=dict)
     text_sha256: str | None = None
 
+    def __repr__(self) -> str:
+        changed = f", overrides={self.overrides}" if self.overrides else ""
+        return (
+            f"Problem({str(self.path)!r}, {self.body.name}, {self.body.n} DOF, "
+            f"{len(self.loads)} loads, {len(self.spec.tasks)} tasks{changed})"
+        )
+
     @property
     def tasks(self) -> list[Task]:
         return list(self.spec.tasks)
@@ -93,7 +100,9 @@ class Problem:
         """The same problem at another posture, given per DOF in degrees."""
         q = self.posture.copy()
         for name, angle in degrees.items():
-            q[_dof_index(self.body, name, f"{key} {name}", self.path)] = math.radians(angle)
+            q[_dof_index(self.body, name, key, self.path)] = math.radians(
+                _degrees(angle, key, name, self.path)
+            )
         _check_posture(self.body, q, key, self.path)
         return replace(self, posture=q)
 
@@ -431,6 +440,13 @@ def _check_tasks(body: BodyModel, spec: ProblemSpec, path: Path) -> None:
             )
 
 
+def _degrees(angle: Any, key: str, name: str, path: Path) -> float:
+    """An angle given for DOF ``name``, as a finite number of degrees."""
+    if isinstance(angle, bool) or not isinstance(angle, int | float) or not math.isfinite(angle):
+        raise ProblemError(path, f"{key}.{name}", angle, "a finite number of degrees")
+    return float(angle)
+
+
 def _dof_index(body: BodyModel, name: str, key: str, path: Path) -> int:
     if name not in body.index:
         raise ProblemError(path, key, name, f"a DOF of {body.name}: one of {body.dof_names}")
@@ -476,6 +492,8 @@ def _problem_error(path: Path, error: ValidationError, raw: dict[str, Any]) -> P
         message = f"{'at least' if first['type'] == 'too_short' else 'at most'} {n} items"
     elif first["type"] in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         message += _unit_of(key)
+    elif first["type"] in ("model_type", "model_attributes_type", "dict_type"):
+        message = "a table of keys (TOML {...} or [section]), not a single value"
     elif first["type"] == "finite_number":
         message = "a finite number" + (f" [{_unit_of(key).strip()}]" if _unit_of(key) else "")
     more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""

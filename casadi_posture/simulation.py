@@ -81,6 +81,12 @@ class SimulationResult:
     ik_fallbacks: int
     ik_iterations: int
 
+    def __repr__(self) -> str:
+        return (
+            f"SimulationResult({str(self.problem.path)!r}, solver={self.solver!r}, "
+            f"stop={self.stop!r}, steps={len(self.timeline.time)}, events={len(self.events)})"
+        )
+
 
 def constraint_settings(problem: Problem) -> ConstraintSettings:
     """The fatigue-constraint settings of a problem file."""

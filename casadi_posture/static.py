@@ -137,6 +137,14 @@ class StaticAnswer:
     levels: tuple[Level, ...]
     flags: tuple[str, ...]
 
+    def __repr__(self) -> str:
+        group = self.limiting
+        limiting = "none" if group is None else f"{group.name} at {group.load_pct_mvc:.1f} %MVC"
+        return (
+            f"StaticAnswer({str(self.problem.path)!r}, reached={self.reached}, "
+            f"limiting={limiting}, flags={self.flags})"
+        )
+
     @property
     def posture_deg(self) -> dict[str, float]:
         """The posture, per DOF [deg]."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 from pathlib import Path
@@ -93,3 +94,57 @@ def test_curve_gives_the_zeros_of_fig3_and_draws_it(tmp_path: Path) -> None:
         cp.plot_curve(fig3, path)
     with pytest.raises(cp.ProblemError, match="dof = 'wrist'"):
         cp.curve(cp.load(PROBLEMS / "frontal_elbow.toml"), "wrist")
+
+
+def test_bad_arguments_are_problem_errors_naming_what_was_expected(tmp_path: Path) -> None:
+    problem = cp.load(HOLD)
+    with pytest.raises(cp.ProblemError, match=r"solver = 'newton': expected one of"):
+        cp.solve(problem, "newton")
+    with pytest.raises(cp.ProblemError, match=r"solver = 'Nullspace'"):
+        cp.simulate(problem, "Nullspace")
+    with pytest.raises(cp.ProblemError, match=r"posture_deg.elbow_flexion = '1.2'"):
+        cp.torques(problem, {"elbow_flexion": "1.2"})
+    with pytest.raises(cp.ProblemError, match="a mapping of dotted keys"):
+        cp.load(HOLD, [("loads[0].mass_kg", 1.0)])
+    vary = {"loads[0].mass_kg": [1.0]}
+    for kwargs, match in (
+        ({"solver": "foo"}, "solver = 'foo'"),
+        ({"jobs": 0}, "jobs = 0: expected at least 1"),
+    ):
+        with pytest.raises(cp.ProblemError, match=match):
+            cp.whatif(HOLD, vary, tmp_path / "w", static=True, **kwargs)
+    with pytest.raises(cp.ProblemError, match="at least one key to vary"):
+        cp.whatif(HOLD, {}, tmp_path / "w", static=True)
+    with pytest.raises(cp.ProblemError, match="at least one value"):
+        cp.whatif(HOLD, {"loads[0].mass_kg": []}, tmp_path / "w", static=True)
+    with pytest.raises(cp.ProblemError, match="solver = 'foo'"):
+        cp.batch(PROBLEMS, tmp_path / "b", solver="foo")
+
+
+def test_whatif_takes_a_loaded_problem_and_batch_a_single_folder(tmp_path: Path) -> None:
+    problem = cp.load(HOLD, {"loads[0].mass_kg": 4.0})
+    report = cp.whatif(problem, {"body.sex": ["male", "female"]}, tmp_path / "w", static=True)
+    loads = report.to_frame().set_index("body.sex")["initial_load_shoulder_flexors_pct_mvc"]
+    alone = cp.solve(problem).to_frame().set_index("name").loc["shoulder_flexors"]
+    assert loads["male"] == pytest.approx(alone["load_pct_mvc"], rel=1e-9)
+    copy = tmp_path / "hold.toml"
+    copy.write_text(HOLD.read_text())
+    edited = cp.load(copy)
+    copy.write_text(HOLD.read_text().replace("mass_kg = 2.5", "mass_kg = 3.0"))
+    with pytest.raises(cp.ProblemError, match="has not changed since"):
+        cp.whatif(edited, {"body.sex": ["male"]}, tmp_path / "e", static=True)
+    folder = tmp_path / "one"
+    folder.mkdir()
+    (folder / "hold.toml").write_text(
+        HOLD.read_text().replace("duration_s = 1800.0", "duration_s = 5.0")
+    )
+    batch = cp.batch(str(folder), tmp_path / "b")
+    assert [row["case"] for row in batch.rows] == ["hold"]
+
+
+def test_results_print_short_and_summaries_are_plain_data() -> None:
+    problem = cp.load(HOLD, {"simulation.duration_s": 5.0})
+    run = cp.simulate(problem)
+    for shown in (problem, cp.solve(problem), run):
+        assert len(repr(shown)) < 300
+    assert json.dumps(run.summary(), allow_nan=False)

@@ -228,7 +228,7 @@ def test_missing_and_malformed_files(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "needle"),
     [
-        (["--posture", "knee=10"], "--posture knee"),
+        (["--posture", "knee=10"], "--posture = 'knee'"),
         (["--posture", "elbow_flexion"], "--posture"),
         (["--posture", "elbow_flexion=abc"], "--posture"),
         (["--posture", "elbow_flexion=200"], "--posture.elbow_flexion"),

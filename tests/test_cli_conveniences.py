@@ -130,3 +130,153 @@ def test_paired_whatif_pairs_instead_of_a_grid(tmp_path: Path) -> None:
         ],
     )
     assert uneven.exit_code == 2 and "lists of one length" in uneven.stderr
+
+
+def _two_problems(folder: Path) -> Path:
+    folder.mkdir()
+    for name in ("holding_m45", "holding_m25"):
+        text = (PROBLEMS / f"{name}.toml").read_text()
+        (folder / f"{name}.toml").write_text(
+            text.replace("duration_s = 1800.0", "duration_s = 5.0")
+        )
+    return folder
+
+
+def test_force_never_deletes_the_current_folder_or_the_inputs(tmp_path: Path, monkeypatch) -> None:
+    """Reproducers: `batch ../two --out . --force` wiped the current folder, and
+    `batch inputs --out inputs --force` deleted the problem files."""
+    inputs = _two_problems(tmp_path / "inputs")
+    here = tmp_path / "here"
+    here.mkdir()
+    (here / "precious.txt").write_text("mine")
+    monkeypatch.chdir(here)
+    runner = CliRunner()
+    for out in (".", "", ".."):
+        result = runner.invoke(main, ["batch", str(inputs), "--out", out, "--force", "--quiet"])
+        assert result.exit_code == 2 and "not the current folder" in result.stderr, out
+    into_inputs = runner.invoke(
+        main, ["batch", str(inputs), "--out", str(inputs), "--force", "--quiet"]
+    )
+    assert into_inputs.exit_code == 2 and "apart from the problem files" in into_inputs.stderr
+    assert (here / "precious.txt").read_text() == "mine"
+    assert sorted(p.name for p in inputs.iterdir()) == ["holding_m25.toml", "holding_m45.toml"]
+
+
+def test_force_starts_a_run_over_and_keeps_the_users_files(tmp_path: Path) -> None:
+    inputs = _two_problems(tmp_path / "inputs")
+    out = tmp_path / "out"
+    runner = CliRunner()
+    args = ["whatif", str(inputs / "holding_m45.toml"), "--vary", "loads[0].mass_kg=1,2"]
+    assert runner.invoke(main, [*args, "--out", str(out), "--quiet"]).exit_code == 0
+    (out / "notes.txt").write_text("mine")
+    again = runner.invoke(main, [*args[:-1], "loads[0].mass_kg=3", "--out", str(out), "--force"])
+    assert again.exit_code == 0, again.output
+    assert (out / "notes.txt").read_text() == "mine"
+    assert sorted(p.name for p in (out / "cases").iterdir()) == ["loads_0_.mass_kg=3"]
+    assert len(list(out.glob("whatif_*.png"))) == 4
+
+
+def test_a_rerun_inside_a_batch_does_not_break_its_resume(tmp_path: Path) -> None:
+    """Reproducer: rerun wrote cases/<case>-rerun/, which --resume then read as a case."""
+    inputs = _two_problems(tmp_path / "inputs")
+    out = tmp_path / "b"
+    runner = CliRunner()
+    assert runner.invoke(main, ["batch", str(inputs), "--out", str(out), "--quiet"]).exit_code == 0
+    manifest = out / "cases" / "holding_m45" / "manifest.json"
+    rerun = runner.invoke(main, ["rerun", str(manifest)])
+    assert rerun.exit_code == 0 and "identical" in rerun.output
+    resumed = runner.invoke(main, ["batch", str(inputs), "--out", str(out), "--resume"])
+    assert resumed.exit_code == 0, resumed.output
+    assert "2 cases (0 run now, 2 already done)" in resumed.output
+
+
+def test_rerun_flags_a_manifest_without_its_summary(tmp_path: Path) -> None:
+    runner = CliRunner()
+    out = tmp_path / "run"
+    args = ["simulate", str(HOLD), "--duration", "5", "--out", str(out)]
+    assert runner.invoke(main, args).exit_code == 0
+    (out / "summary.json").unlink()
+    result = runner.invoke(main, ["rerun", str(out / "manifest.json")])
+    assert result.exit_code == 1 and "FLAGGED: no summary.json" in result.output
+
+
+def test_validate_reports_every_file_and_reads_folders(tmp_path: Path) -> None:
+    (tmp_path / "bad.toml").write_text("x = 1\n")
+    (tmp_path / "good.toml").write_text(HOLD.read_text())
+    result = CliRunner().invoke(main, ["validate", str(tmp_path / "bad.toml"), str(PROBLEMS)])
+    assert result.exit_code == 2
+    assert result.stderr.count("error:") == 1 and "bad.toml" in result.stderr
+    assert result.output.count("ok  ") == len(list(PROBLEMS.glob("*.toml")))
+
+
+def test_init_with_a_template_name_alone_asks_for_the_file(tmp_path: Path, monkeypatch) -> None:
+    """Reproducer: `init elbow` wrote a file named `elbow` from the hold template."""
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(main, ["init", "elbow"])
+    assert result.exit_code == 2 and "the file to write after elbow" in result.stderr
+    nowhere = CliRunner().invoke(main, ["init", str(tmp_path / "no" / "such" / "x.toml")])
+    assert nowhere.exit_code == 2 and not (tmp_path / "no").exists()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_vary_twice_one_key_is_refused_and_paired_values_may_repeat(tmp_path: Path) -> None:
+    runner = CliRunner()
+    twice = runner.invoke(
+        main,
+        [
+            "whatif",
+            str(HOLD),
+            "--static",
+            "--out",
+            str(tmp_path / "t"),
+            "--vary",
+            "loads[0].mass_kg=1,2",
+            "--vary",
+            "loads[0].mass_kg=3",
+        ],
+    )
+    assert twice.exit_code == 2 and "each key varied once" in twice.stderr
+    paired = runner.invoke(
+        main,
+        [
+            "whatif",
+            str(HOLD),
+            "--static",
+            "--paired",
+            "--quiet",
+            "--out",
+            str(tmp_path / "p"),
+            "--vary",
+            "loads[0].mass_kg=1,2.5,5",
+            "--vary",
+            "body.sex=male,female,male",
+        ],
+    )
+    assert paired.exit_code == 0, paired.stderr
+    assert len(list((tmp_path / "p" / "cases").iterdir())) == 3
+    mismatch = runner.invoke(
+        main,
+        [
+            "whatif",
+            str(HOLD),
+            "--static",
+            "--paired",
+            "--out",
+            str(tmp_path / "m"),
+            "--vary",
+            "loads[0].mass_kg=1,2",
+            "--vary",
+            "body.sex=male",
+        ],
+    )
+    assert mismatch.exit_code == 2
+    assert "{'loads[0].mass_kg': 2, 'body.sex': 1}" in mismatch.stderr
+
+
+def test_posture_and_set_errors_name_the_key_and_value() -> None:
+    runner = CliRunner()
+    posture = runner.invoke(main, ["torques", str(HOLD), "--posture", "elbow=10"])
+    assert posture.exit_code == 2
+    assert "--posture = 'elbow': expected a DOF of sagittal_arm" in posture.stderr
+    table = runner.invoke(main, ["torques", str(HOLD), "--set", "loads[0]=5"])
+    assert table.exit_code == 2 and "loads[0] = 5: expected a table of keys" in table.stderr

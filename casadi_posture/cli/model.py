@@ -19,7 +19,7 @@ from casadi_posture.cli.common import (
     problem_from,
 )
 from casadi_posture.data.templates import TEMPLATES, template
-from casadi_posture.errors import ProblemError
+from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
 
 
@@ -45,31 +45,50 @@ def init(template_or_file: str, file: Path | None, force: bool) -> None:
       casadi-posture init my_hold.toml
       casadi-posture init elbow my_elbow.toml
     """
+    if file is None and template_or_file in TEMPLATES:
+        raise ProblemError(None, "FILE", MISSING, f"the file to write after {template_or_file}")
     name, target = (template_or_file, file) if file else ("hold", Path(template_or_file))
     if name not in TEMPLATES:
         raise ProblemError(None, "TEMPLATE", name, f"one of {sorted(TEMPLATES)}")
     api.check_out(target, force=force, key="FILE")
-    target.parent.mkdir(parents=True, exist_ok=True)
+    if not target.parent.is_dir():
+        raise ProblemError(None, "FILE", str(target), "a file in an existing folder")
     target.write_text(template(name), encoding="utf-8")
     click.echo(f"written: {target} (from the {name} template; check it with validate)")
 
 
 @main.command()
-@click.argument("problems", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.argument("problems", nargs=-1, required=True, type=click.Path())
 @SET_OPTION
 def validate(problems: tuple[str, ...], sets: tuple[str, ...]) -> None:
-    """Check problem files; print 'ok' per valid file.
+    """Check problem files (folders give their *.toml); print 'ok' per valid file and one
+    error line per invalid one, and exit with code 2 if any is invalid.
 
     \b
     Example:
-      casadi-posture validate problems/*.toml
+      casadi-posture validate problems/
     """
-    for path in problems:
-        problem = problem_from(path, sets=sets)
+    paths = [
+        str(f)
+        for p in map(Path, problems)
+        for f in (sorted(p.glob("*.toml")) if p.is_dir() else [p])
+    ]
+    if not paths:
+        raise ProblemError(problems[0], None, None, "a folder with .toml files")
+    invalid = 0
+    for path in paths:
+        try:
+            problem = problem_from(path, sets=sets)
+        except ProblemError as error:
+            click.echo(f"error: {error}", err=True)
+            invalid += 1
+            continue
         click.echo(
             f"ok  {path}  ({problem.body.name}, {problem.body.n} DOF, "
             f"{len(problem.loads)} loads, {len(problem.tasks)} tasks)"
         )
+    if invalid:
+        raise SystemExit(2)
 
 
 @main.command()

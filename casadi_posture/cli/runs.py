@@ -21,7 +21,7 @@ from casadi_posture.cli.common import (
     parse_sets,
     problem_from,
 )
-from casadi_posture.errors import ProblemError
+from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
@@ -122,14 +122,20 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
     out = out or path.parent.with_name(path.parent.name + "-rerun")
     with interrupt.deferred():
         api.check_out(out, force=force)
-        resolved = api.from_dict(record["problem_data"], record["problem_path"])
+        try:
+            resolved = api.from_dict(record["problem_data"], record["problem_path"])
+        except ProblemError as error:
+            if error.key is None:
+                raise ProblemError(path, "problem_data", MISSING, error.expected) from None
+            key = f"problem_data.{error.key}"
+            raise ProblemError(path, key, error.value, error.expected) from None
         run = api.simulate(resolved, record["solver"])
         files = _write(run, out, command_line())
     code = _report(run, files, law(resolved))
     original = path.parent / "summary.json"
     if not original.exists():
-        click.echo(f"no summary.json beside {path} to compare with")
-        raise SystemExit(code)
+        click.echo(f"FLAGGED: no summary.json beside {path}: the rerun was not compared")
+        raise SystemExit(1)
     same = original.read_bytes() == (out / "summary.json").read_bytes()
     click.echo(f"summary.json {'identical to' if same else 'DIFFERS from'} {original}")
     raise SystemExit(code or (0 if same else 1))
@@ -397,7 +403,10 @@ def whatif(
     """
     from casadi_posture.runs.whatif import parse_vary
 
-    parsed = [parse_vary(text, problem) for text in varies]
+    parsed = [parse_vary(text, problem, unique=not paired) for text in varies]
+    keys = [key for key, _ in parsed]
+    if len(set(keys)) != len(keys):
+        raise ProblemError(problem, "--vary", keys, "each key varied once")
     out = out or Path("out", "whatif", Path(problem).stem)
     report = api.whatif(
         problem,

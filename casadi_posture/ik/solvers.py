@@ -7,6 +7,7 @@ from typing import Protocol
 
 import numpy as np
 
+from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
 from casadi_posture.ik.lexicographic import LexicographicOptions, LexicographicSolver
 from casadi_posture.ik.nullspace import NullspaceOptions, NullspaceSolver
@@ -36,8 +37,13 @@ def make_solver(name: str, hierarchy: TaskHierarchy, spec: SolverSpec | None = N
             )
             if v is not None
         }
+    check_solver(name)
     if name == "nullspace":
         return NullspaceSolver(hierarchy, replace(NullspaceOptions(), **given))
-    if name == "lexicographic":
-        return LexicographicSolver(hierarchy, replace(LexicographicOptions(), **given))
-    raise ValueError(f"unknown solver {name!r}")
+    return LexicographicSolver(hierarchy, replace(LexicographicOptions(), **given))
+
+
+def check_solver(name: str | None, file: object = None, key: str = "solver") -> None:
+    """Refuse a solver name other than ``SOLVER_NAMES`` (None: the problem file's)."""
+    if name is not None and name not in SOLVER_NAMES:
+        raise ProblemError(file, key, name, f"one of {list(SOLVER_NAMES)}")

@@ -202,8 +202,8 @@ def write_results(
     try:
         import pyarrow as pa
         import pyarrow.parquet as pq
-    except ImportError:
-        pass
+    except ImportError:  # no Parquet: none left from an earlier run beside the new CSV
+        (out / "timeline.parquet").unlink(missing_ok=True)
     else:
         paths.append(out / "timeline.parquet")
         pq.write_table(pa.table({k: list(v) for k, v in columns.items()}), str(paths[-1]))

@@ -38,6 +38,7 @@ from tqdm import tqdm
 from casadi_posture import __version__, interrupt
 from casadi_posture.errors import MISSING, CasadiPostureError, ProblemError
 from casadi_posture.frames import frame
+from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.plain import dumps, plain
 from casadi_posture.output.rows import static_row
 from casadi_posture.problem import Problem, load_problem, read_problem_text
@@ -46,6 +47,7 @@ from casadi_posture.static import rule, solve
 CASES = "cases"
 ROW = "row.json"
 RUN = "run.json"
+SUMMARY = "summary.csv"
 LEADING = (
     "case",
     "status",
@@ -135,6 +137,7 @@ class BatchReport:
 def cases_from_paths(paths: Sequence[str | Path], solver: str | None = None) -> list[Case]:
     """One case per problem file; folders give their ``*.toml`` files. Named by file stem,
     or by the path where stems repeat."""
+    check_solver(solver, paths[0] if paths else None, "--solver")
     files: list[Path] = []
     for item in map(Path, paths):
         if item.is_dir():
@@ -240,6 +243,8 @@ def run_batch(
     a second or two, keeps every finished case, cancels the rest and returns with
     ``interrupted``.
     """
+    if jobs < 1:
+        raise ProblemError(None, "jobs", jobs, "at least 1 worker process")
     names = [c.name for c in cases]
     if len(set(names)) != len(names):
         raise ProblemError(None, "cases", names, "unique case names")
@@ -280,7 +285,17 @@ def run_batch(
 
 
 def _is_case(path: Path) -> bool:
-    return path.is_dir() and not path.name.startswith(".")
+    """A finished case's folder (a folder a user added, or a rerun's, is not one)."""
+    return path.is_dir() and not path.name.startswith(".") and (path / ROW).is_file()
+
+
+def clear_run(out: Path, outputs: Sequence[str] = ()) -> None:
+    """Delete an earlier run's files from ``out``: its cases, ``run.json``, its summary and
+    the names or glob patterns in ``outputs``; nothing else of the folder."""
+    shutil.rmtree(out / CASES, ignore_errors=True)
+    for pattern in (RUN, SUMMARY, SUMMARY.replace(".csv", ".parquet"), *outputs):
+        for path in out.glob(pattern):
+            path.unlink()
 
 
 def _row(path: Path) -> dict[str, Any]:
@@ -418,7 +433,7 @@ def write_summary(rows: Sequence[dict[str, Any]], out: Path) -> Path:
     Empty cells (Parquet nulls) mean: unlimited for an endurance, never for a time, none
     for a group or a reason."""
     columns = list(LEADING) + sorted({k for r in rows for k in r} - set(LEADING))
-    path = out / "summary.csv"
+    path = out / SUMMARY
     staging = path.with_suffix(".csv.tmp")
     with staging.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.DictWriter(handle, fieldnames=columns, extrasaction="ignore")

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from casadi_posture.errors import ProblemError
-from casadi_posture.ik.solvers import SOLVER_NAMES
+from casadi_posture.ik.solvers import check_solver
 from casadi_posture.problem import load_problem, read_problem_text
 from casadi_posture.runs.batch import Case, safe_name
 from casadi_posture.spec.overrides import parse_key, parse_value
@@ -26,10 +26,16 @@ OUTCOMES = {
 }
 STATIC_OUTCOMES = ("limiting_endurance_at_start_min",)
 
+#: What a what-if writes beside a batch's files (``--force`` deletes them).
+WHATIF_OUTPUTS = ("whatif.csv", "whatif_*_vs_*.png")
 
-def parse_vary(text: str, problem: str | None = None) -> tuple[str, list[Any]]:
+
+def parse_vary(
+    text: str, problem: str | None = None, *, unique: bool = True
+) -> tuple[str, list[Any]]:
     """``KEY=V1,V2,...`` -> (key, values); commas inside brackets belong to one value.
-    ``problem`` names the file in error messages."""
+    ``problem`` names the file in error messages; ``unique``: each value at most once (a
+    paired study may repeat one)."""
     key, sep, values = text.partition("=")
     if not sep or not key or not values:
         raise ProblemError(problem, "--vary", text, "KEY=V1,V2,... such as loads[0].mass_kg=2.5,5")
@@ -51,7 +57,7 @@ def parse_vary(text: str, problem: str | None = None) -> tuple[str, list[Any]]:
     if any(not p.strip() for p in parts):
         raise ProblemError(problem, "--vary", text, "no empty value between commas")
     values = [parse_value(p.strip()) for p in parts]
-    if len({repr(v) for v in values}) != len(values):
+    if unique and len({repr(v) for v in values}) != len(values):
         raise ProblemError(problem, "--vary", text, "each value once")
     if any(isinstance(v, float) for v in values):
         values = [float(v) if isinstance(v, int) and not isinstance(v, bool) else v for v in values]
@@ -82,14 +88,20 @@ def grid(
     keys = [k for k, _ in varies]
     if len(set(keys)) != len(keys):
         raise ProblemError(problem, "--vary", keys, "each key varied once")
-    lengths = {len(values) for _, values in varies}
-    if paired and len(lengths) > 1:
-        raise ProblemError(problem, "--vary", sorted(lengths), "lists of one length with --paired")
+    check_solver(solver, problem)
+    empty = [k for k, values in varies if not values]
+    if empty:
+        raise ProblemError(problem, "--vary", empty[0], "at least one value per varied key")
+    lengths = {k: len(values) for k, values in varies}
+    if paired and len(set(lengths.values())) > 1:
+        raise ProblemError(problem, "--vary", lengths, "lists of one length with --paired")
     combos = (
         list(zip(*(values for _, values in varies), strict=True))
         if paired
         else list(itertools.product(*(values for _, values in varies)))
     )
+    if len({repr(c) for c in combos}) != len(combos):
+        raise ProblemError(problem, "--vary", keys, "each combination of values once")
     count = len(combos)
     if count > max_cases:
         raise ProblemError(
@@ -98,10 +110,8 @@ def grid(
             f"{count} cases",
             f"at most {max_cases} cases; pass --max-cases {count} to run them all",
         )
-    for key, values in varies:
-        unknown = [v for v in values if key == "solver" and v not in SOLVER_NAMES]
-        if unknown:
-            raise ProblemError(problem, "--vary solver", unknown[0], f"one of {SOLVER_NAMES}")
+    for value in dict(varies).get("solver", []):
+        check_solver(value, problem, "--vary solver")
     text = read_problem_text(problem)
     cases = []
     for combo in combos:

@@ -48,6 +48,8 @@ def parse_value(text: str) -> Any:
 
 def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) -> dict[str, Any]:
     """A copy of the file's data ``raw`` with each dotted key set to its value."""
+    if not isinstance(overrides, Mapping):
+        raise ProblemError(path, "overrides", overrides, "a mapping of dotted keys to values")
     out = deepcopy(raw)
     for key, value in overrides.items():
         parts = parse_key(key)
