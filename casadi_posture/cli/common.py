@@ -15,7 +15,7 @@ from casadi_posture.ik.solvers import SOLVER_NAMES
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import table
 from casadi_posture.problem import Problem, load_problem
-from casadi_posture.spec.overrides import parse_key, parse_value
+from casadi_posture.spec.overrides import parse_value, split_assignment
 from casadi_posture.static import StaticAnswer
 
 INTERRUPTED = interrupt.EXIT_CODE
@@ -98,13 +98,8 @@ def parse_sets(items: tuple[str, ...], path: str | None = None) -> dict[str, Any
     (``5``, ``2.5``, ``"passive"`` or ``passive``, ``[0, 1]``)."""
     out: dict[str, Any] = {}
     for item in items:
-        key, sep, value = item.partition("=")
-        if not sep or not key or not value:
-            raise ProblemError(path, "--set", item, "KEY=VALUE such as fatigue.strategy=passive")
-        try:
-            parse_key(key)
-        except ProblemError as error:
-            raise ProblemError(path, "--set", item, error.expected) from None
+        example = "KEY=VALUE such as fatigue.strategy=passive"
+        key, value = split_assignment(item, "--set", path, example)
         out[key] = parse_value(value)
     return out
 

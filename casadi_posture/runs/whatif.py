@@ -15,7 +15,7 @@ from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.problem import load_problem, read_problem_text
 from casadi_posture.runs.batch import Case, safe_name
-from casadi_posture.spec.overrides import parse_key, parse_value
+from casadi_posture.spec.overrides import parse_value, split_assignment
 
 #: Outcomes plotted against every varied key, with their axis labels.
 OUTCOMES = {
@@ -36,13 +36,8 @@ def parse_vary(
     """``KEY=V1,V2,...`` -> (key, values); commas inside brackets belong to one value.
     ``problem`` names the file in error messages; ``unique``: each value at most once (a
     paired study may repeat one)."""
-    key, sep, values = text.partition("=")
-    if not sep or not key or not values:
-        raise ProblemError(problem, "--vary", text, "KEY=V1,V2,... such as loads[0].mass_kg=2.5,5")
-    try:
-        parse_key(key)
-    except ProblemError as error:
-        raise ProblemError(problem, "--vary", text, error.expected) from None
+    example = "KEY=V1,V2,... such as loads[0].mass_kg=2.5,5"
+    key, values = split_assignment(text, "--vary", problem, example)
     parts: list[str] = []
     depth, current = 0, ""
     for char in values:

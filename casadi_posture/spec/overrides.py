@@ -38,6 +38,19 @@ def parse_key(key: str) -> list[str | int]:
     return parts
 
 
+def split_assignment(text: str, option: str, path: Any, example: str) -> tuple[str, str]:
+    """``KEY=VALUE`` -> (key, value text), the key checked; a malformed one is a
+    :class:`ProblemError` naming the command-line ``option`` and an ``example``."""
+    key, sep, value = text.partition("=")
+    if not sep or not key or not value:
+        raise ProblemError(path, option, text, example)
+    try:
+        parse_key(key)
+    except ProblemError as error:
+        raise ProblemError(path, option, text, error.expected) from None
+    return key, value
+
+
 def parse_value(text: str) -> Any:
     """A value as TOML reads it (``5``, ``2.5``, ``true``, ``[0, 1]``); otherwise the string."""
     try:
