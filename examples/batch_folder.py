@@ -27,7 +27,7 @@ def main(
             if row["status"] in ("ok", "flagged")
             else row["error"]
         )
-        print(f"{row['case']:22s} {row['status']:8s} {outcome}")
+        print(f"{row['case']:24s} {row['status']:8s} {outcome}")
     return report
 
 

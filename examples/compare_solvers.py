@@ -25,7 +25,7 @@ def main(folder: Path = PROBLEMS) -> list[cp.Comparison]:
     for c in comparisons:
         worst = max(max(c.nullspace.residuals), max(c.lexicographic.residuals))
         print(
-            f"{Path(c.problem).stem:22s} {c.verdict:6s} largest residual {worst:.1e}, "
+            f"{Path(c.problem).stem:24s} {c.verdict:6s} largest residual {worst:.1e}, "
             f"postures {c.max_joint_difference_deg:.1e} deg apart, "
             f"nullspace {1e3 * c.nullspace.wall_time_s:.2f} ms, "
             f"lexicographic {1e3 * c.lexicographic.wall_time_s:.2f} ms"

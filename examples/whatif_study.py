@@ -24,9 +24,7 @@ def main(
     masses_kg: tuple[float, ...] = (1.0, 2.5, 5.0),
     duration_s: float = 900.0,
 ) -> object:
-    report = cp.whatif(
-        HOLD, prepare_study(list(masses_kg), duration_s), out, solver="nullspace", force=True
-    )
+    report = cp.whatif(HOLD, prepare_study(list(masses_kg), duration_s), out, force=True)
     table = report.to_frame()[
         [
             "loads[0].mass_kg",
