@@ -14,7 +14,6 @@ degrees, N·m, %MVC, s.
 
 from __future__ import annotations
 
-import hashlib
 import shutil
 import tomllib
 from collections.abc import Mapping, Sequence
@@ -36,7 +35,13 @@ from casadi_posture.output.results import (
     write_results,
 )
 from casadi_posture.output.rows import simulation_row
-from casadi_posture.problem import Problem, load_problem, problem_from_data, read_problem_text
+from casadi_posture.problem import (
+    Problem,
+    load_problem,
+    problem_from_data,
+    read_problem_text,
+    text_sha256,
+)
 from casadi_posture.runs import compare as comparison
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
 from casadi_posture.runs.whatif import (
@@ -272,7 +277,7 @@ def _problem_file(
     if not isinstance(problem, Problem):
         return str(problem), dict(overrides or {})
     path = problem.path
-    unchanged = path.is_file() and problem.text_sha256 == _sha256(path)
+    unchanged = path.is_file() and problem.text_sha256 == text_sha256(read_problem_text(path))
     if not unchanged:
         raise ProblemError(
             path,
@@ -283,22 +288,23 @@ def _problem_file(
     return str(path), dict(problem.overrides) | dict(overrides or {})
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(read_problem_text(path).encode()).hexdigest()
-
-
 def check_out(out: Path, *, force: bool, key: str = "--out") -> None:
     """The rule for every output: a new or empty folder (or a new file), unless ``force``;
     never the current folder or one that holds it."""
-    here = Path.cwd().resolve()
-    if str(out) in ("", ".") or out.resolve() in (here, *here.parents):
-        expected = "a folder or file name (not the current folder or one that holds it)"
-        raise ProblemError(None, key, str(out), expected)
+    check_out_name(out, key)
     if force or not out.exists():
         return
     if out.is_dir() and not any(out.iterdir()):
         return
     raise ProblemError(out, key, MISSING, "a new or empty output, or --force to overwrite it")
+
+
+def check_out_name(out: Path, key: str = "--out") -> None:
+    """An output is never the current folder or one that holds it."""
+    here = Path.cwd().resolve()
+    if str(out) in ("", ".") or out.resolve() in (here, *here.parents):
+        expected = "a folder or file name (not the current folder or one that holds it)"
+        raise ProblemError(None, key, str(out), expected)
 
 
 def prepare_runs(
@@ -315,7 +321,7 @@ def prepare_runs(
     ``inputs`` (the problem files)."""
     if resume and force:
         raise ProblemError(out, "--resume", MISSING, "either --resume or --force, not both")
-    check_out(out, force=True)
+    check_out_name(out)
     inside = [p for p in map(Path, inputs) if out.resolve() in Path(p).resolve().parents]
     if inside:
         raise ProblemError(

@@ -141,7 +141,12 @@ def load_problem(
             path, None, None, f"valid TOML nested at most {MAX_NESTING} deep"
         ) from None
     problem = problem_from_data(raw, path, overrides)
-    return replace(problem, text_sha256=hashlib.sha256(text.encode()).hexdigest())
+    return replace(problem, text_sha256=text_sha256(text))
+
+
+def text_sha256(text: str) -> str:
+    """The SHA-256 of a problem file's text (UTF-8), as manifests record it."""
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def problem_from_data(

@@ -103,6 +103,7 @@ class LexicographicSolver:
         b = np.inf if inequality is None else float(inequality.b)
         q_prev = np.clip(np.asarray(q0, dtype=float), body.lower, body.upper)
         q, kept, bounds = q_prev.copy(), [], []
+        values = h.function(q, h.targets)  # every residual and Jacobian at q, one call
         iterations, solved, status, success = 0, 0, "Solve_Succeeded", True
         redundant = True
         for k, solver in enumerate(self.levels):
@@ -118,9 +119,9 @@ class LexicographicSolver:
             stats = solver.stats()
             solved = k + 1
             iterations += int(stats.get("iter_count", 0))
-            if self._start_is_better(q, out, k, q_prev, inequality):
-                problem = ""  # the start met every constraint of this level already
-            else:
+            moved = not self._start_is_better(q, values, out, k, q_prev, inequality)
+            problem = ""  # unless moved, the start met every constraint of this level already
+            if moved:
                 q = np.asarray(out["x"]).reshape(-1)
                 problem = self._check(q, np.asarray(out["g"]).reshape(-1), lbg, ubg)
             if not stats["success"] or problem:
@@ -130,8 +131,10 @@ class LexicographicSolver:
                 break
             if k == h.depth:
                 break
-            rows, lo, hi, redundant = self._kept_rows(q, k, inequality)
-            e_k = np.asarray(h.function(q, h.targets)[k]).reshape(-1)
+            if moved:
+                values = h.function(q, h.targets)
+            rows, lo, hi, redundant = self._kept_rows(q, values, k, inequality)
+            e_k = np.asarray(values[k]).reshape(-1)
             kept.append((rows.ravel(order="F"), e_k))
             bounds.append((lo, hi))
         at_limits, active = active_constraints(body, q, inequality)
@@ -151,6 +154,7 @@ class LexicographicSolver:
     def _start_is_better(
         self,
         start: np.ndarray,
+        values: list,
         out: dict,
         k: int,
         q_prev: np.ndarray,
@@ -161,12 +165,12 @@ class LexicographicSolver:
         "acceptable" farther from zero than where it began (1e-6 m from a 9e-8 m start,
         measured on the line + plane problem). The start is feasible for the kept rows by
         construction (they are zero there) and within the bounds; only the inequality is
-        checked."""
+        checked. ``values``: the hierarchy's residuals and Jacobians at ``start``."""
         if inequality is not None and inequality.a @ start > inequality.b + BOUND_TOLERANCE:
             return False
         h = self.hierarchy
         if k < h.depth:
-            objective = float(np.sum(np.asarray(h.function(start, h.targets)[k]) ** 2))
+            objective = float(np.sum(np.asarray(values[k]) ** 2))
         else:
             objective = float(np.sum((start - q_prev) ** 2))
         return objective < float(out["f"])
@@ -184,12 +188,12 @@ class LexicographicSolver:
         return ""
 
     def _kept_rows(
-        self, q: np.ndarray, k: int, inequality: Inequality | None
+        self, q: np.ndarray, values: list, k: int, inequality: Inequality | None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-        """S_k and its row bounds: the rows of e_k that level k can still change at ``q``;
-        and whether joint space is still redundant below level k."""
+        """S_k and its row bounds: the rows of e_k that level k can still change at ``q``
+        (``values``: the residuals and Jacobians there); and whether joint space is still
+        redundant below level k."""
         h, body = self.hierarchy, self.hierarchy.body
-        values = h.function(q, h.targets)
         jacobians = [np.asarray(values[h.depth + j]) for j in range(k + 1)]
         free = np.ones(body.n)
         free[[body.index[d] for d in active_constraints(body, q, None)[0]]] = 0.0

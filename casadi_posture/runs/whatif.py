@@ -3,7 +3,6 @@ plots of each outcome against each varied key."""
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -13,7 +12,7 @@ import numpy as np
 
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import check_solver
-from casadi_posture.problem import load_problem, read_problem_text
+from casadi_posture.problem import load_problem, read_problem_text, text_sha256
 from casadi_posture.runs.batch import Case, safe_name
 from casadi_posture.spec.overrides import parse_value, split_assignment
 
@@ -132,7 +131,7 @@ def describe_grid(
     return {
         "kind": "whatif",
         "problem": problem,
-        "problem_sha256": hashlib.sha256(text.encode()).hexdigest(),
+        "problem_sha256": text_sha256(text),
         "vary": {key: values for key, values in varies},
         "solver": solver,
         "static": not simulate,
