@@ -19,7 +19,9 @@ def _zero_posture(problem: Problem, expression: ca.SX) -> list[float]:
 def description(problem: Problem) -> dict[str, Any]:
     """DOFs, segments, landmarks, loads, half-joints, tasks, settings and parameters.
 
-    Positions are in the world frame at the zero posture [m], ranges in degrees.
+    Positions are in the world frame at the zero posture [m], ranges in degrees. ``dofs``,
+    ``segments`` and ``landmarks`` are the body's tree as a problem file writes it
+    (``body.tree``), whether the file gave one or named a built-in model.
     """
     body = problem.body
     spec = problem.spec
@@ -31,33 +33,10 @@ def description(problem: Problem) -> dict[str, Any]:
         "stature_m": spec.body.stature_m,
         "body_mass_kg": spec.body.mass_kg,
         "gravity_m_s2": body.gravity,
-        "dofs": [
-            {
-                "name": d.name,
-                "parent": d.parent,
-                "origin_m": list(map(float, d.origin)),
-                "axis": [float(v) for v in body.axis(d.name)],
-                "range_deg": [math.degrees(d.lower), math.degrees(d.upper)],
-                "half_joints": {"positive": d.positive, "negative": d.negative},
-                "region": d.region,
-            }
-            for d in body.dofs
-        ],
-        "segments": [
-            {
-                "name": s.name,
-                "dof": s.dof,
-                "mass_kg": s.mass,
-                "com_m": list(map(float, s.com)),
-                "proximal": s.proximal,
-                "distal": s.distal,
-            }
-            for s in body.segments
-        ],
-        "landmarks": [
-            {"name": lm.name, "dof": lm.dof, "position_m": list(map(float, lm.position))}
-            for lm in body.landmarks.values()
-        ],
+        **{
+            table: [item.model_dump(exclude_none=True) for item in getattr(problem.tree, table)]
+            for table in ("dofs", "segments", "landmarks")
+        },
         "loads": [
             {
                 "name": load.name,

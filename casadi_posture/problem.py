@@ -29,9 +29,11 @@ from casadi_posture.biomech.strength import (
     Strength,
     TabulatedStrength,
     default_strength,
+    known_groups,
 )
 from casadi_posture.biomech.torques import TorqueModel
 from casadi_posture.body.anthropometry import SegmentInertia, segment_inertia
+from casadi_posture.body.file_tree import body_from_tree, check_tree
 from casadi_posture.body.loads import Load
 from casadi_posture.body.models import MODELS
 from casadi_posture.body.tree import BodyModel
@@ -43,22 +45,25 @@ from casadi_posture.ik.tasks import tasks_from_specs
 from casadi_posture.spec.overrides import apply
 from casadi_posture.spec.schema import (
     ComTask,
-    DofSpec,
     ExponentialPassiveSpec,
-    HalfJointSpec,
+    LimitTorquePassiveSpec,
     NoPassiveSpec,
     OrientationTask,
     PostureTask,
     ProblemSpec,
     Task,
+    TreeDofSpec,
+    TreeHalfJointSpec,
+    TreeSpec,
     passive_model_tag,
 )
 
 
 @dataclass(frozen=True)
 class Problem:
-    """A validated problem: the body, its torque model inputs, the posture [rad], settings and
-    the fatigue model (stateless: one state per simulation); ``data`` is what it was read
+    """A validated problem: the body (``tree`` as a problem file writes it, built-in models
+    included), its torque model inputs, the posture [rad], settings and the fatigue model
+    (stateless: one state per simulation); ``data`` is what it was read
     from (the file's tables with the ``overrides`` applied), ``text_sha256`` the SHA-256 of
     the file's text when it came from one."""
 
@@ -71,6 +76,7 @@ class Problem:
     posture: np.ndarray
     parameters: tuple[Parameter, ...]
     fatigue: FatigueModel
+    tree: TreeSpec
     data: dict[str, Any] = field(default_factory=dict)
     overrides: dict[str, Any] = field(default_factory=dict)
     text_sha256: str | None = None
@@ -195,49 +201,35 @@ def _check_nesting(raw: Any, path: Path) -> None:
 
 
 def resolve(spec: ProblemSpec, path: Path) -> Problem:
-    """Build the body model and its loads, strengths and passive torques from a spec."""
-    body_spec = spec.body
-    if body_spec.model not in MODELS:
-        raise ProblemError(path, "body.model", body_spec.model, f"one of {sorted(MODELS)}")
-    recipe = MODELS[body_spec.model]
+    """Build the body model and its loads, strengths and passive torques from a spec: the
+    file's own ``body.tree``, or the tree of a built-in ``body.model`` with its overrides."""
     records: list[Parameter] = [parameters.load("constants")["constants.gravity"]]
+    if spec.body.tree is not None:
+        tree = spec.body.tree
+        check_tree(tree, path)
+        where = [f"body.tree.dofs[{i}]" for i in range(len(tree.dofs))]
+        records += [
+            Parameter(f"joints.{d.name}.range", d.range_deg, "deg", f"{path} {w}.range_deg", "user")
+            for d, w in zip(tree.dofs, where, strict=True)
+        ]
+    else:
+        tree, built = _builtin_tree(spec, path)
+        where = [f"body.dofs.{d.name}" for d in tree.dofs]
+        records += built
+    body = body_from_tree(tree, records[0].value)
 
-    _unknown(path, "body.segments", body_spec.segments, recipe.segments)
-    segments = {}
-    for name in recipe.segments:
-        inertia = segment_inertia(
-            name, sex=body_spec.sex, stature=body_spec.stature_m, body_mass=body_spec.mass_kg
-        )
-        segments[name] = _override_segment(inertia, body_spec.segments.get(name), path)
-        records += segments[name].parameters
-
-    _unknown(path, "body.dofs", body_spec.dofs, recipe.dofs)
-    ranges: dict[str, tuple[float, float]] = {}
     passive: dict[str, PassiveTorque] = {}
-    for name in recipe.dofs:
-        table = parameters.load("joints")
-        override = body_spec.dofs.get(name)
-        lo, hi = table[f"joints.{name}.range.lower"], table[f"joints.{name}.range.upper"]
-        if override is not None and override.range_deg is not None:
-            where = f"{path} body.dofs.{name}.range_deg"
-            lo = lo.overridden(override.range_deg[0], where)
-            hi = hi.overridden(override.range_deg[1], where)
-        ranges[name] = (math.radians(lo.value), math.radians(hi.value))
-        records += [lo, hi]
-        passive[name], passive_records = _passive(name, override, ranges[name], path)
-        records += passive_records
-
-    gravity = records[0].value
-    body = recipe.build(segments, ranges, gravity)
-
-    known_groups = [h.name for h in body.half_joints]
-    _unknown(path, "body.half_joints", body_spec.half_joints, known_groups)
     strength: dict[str, Strength] = {}
-    for group in known_groups:
-        strength[group], record = _strength(
-            group, body_spec.half_joints.get(group), body, spec, path
-        )
-        records.append(record)
+    for dof, key in zip(tree.dofs, where, strict=True):
+        passive[dof.name], passive_records = _passive(dof, key, path)
+        records += passive_records
+        for side in ("positive", "negative"):
+            group = getattr(dof, side)
+            group_key = (
+                f"{key}.{side}" if spec.body.tree is not None else f"body.half_joints.{group.name}"
+            )
+            strength[group.name], record = _strength(group, group_key, body, spec, path)
+            records.append(record)
 
     loads = tuple(_load(body, spec, i, path) for i in range(len(spec.loads)))
     _check_tasks(body, spec, path)
@@ -258,7 +250,62 @@ def resolve(spec: ProblemSpec, path: Path) -> Problem:
     unique: dict[str, Parameter] = {}
     for record in records:
         unique.setdefault(record.name, record)
-    return Problem(path, spec, body, passive, strength, loads, q, tuple(unique.values()), fatigue)
+    records = tuple(unique.values())
+    return Problem(path, spec, body, passive, strength, loads, q, records, fatigue, tree)
+
+
+def _builtin_tree(spec: ProblemSpec, path: Path) -> tuple[TreeSpec, list[Parameter]]:
+    """The tree of the built-in model ``body.model`` scaled to the file's body, with the
+    file's overrides of DOFs, segments and half-joints merged in, and the records of its
+    segments and ranges."""
+    body_spec = spec.body
+    if body_spec.model not in MODELS:
+        raise ProblemError(path, "body.model", body_spec.model, f"one of {sorted(MODELS)}")
+    recipe = MODELS[body_spec.model]
+    records: list[Parameter] = []
+    _unknown(path, "body.segments", body_spec.segments, recipe.segments)
+    segments = {}
+    for name in recipe.segments:
+        inertia = segment_inertia(
+            name, sex=body_spec.sex, stature=body_spec.stature_m, body_mass=body_spec.mass_kg
+        )
+        segments[name] = _override_segment(inertia, body_spec.segments.get(name), path)
+        records += segments[name].parameters
+
+    _unknown(path, "body.dofs", body_spec.dofs, recipe.dofs)
+    table = parameters.load("joints")
+    ranges: dict[str, tuple[float, float]] = {}
+    for name in recipe.dofs:
+        override = body_spec.dofs.get(name)
+        lo, hi = table[f"joints.{name}.range.lower"], table[f"joints.{name}.range.upper"]
+        if override is not None and override.range_deg is not None:
+            where = f"{path} body.dofs.{name}.range_deg"
+            lo = lo.overridden(override.range_deg[0], where)
+            hi = hi.overridden(override.range_deg[1], where)
+        ranges[name] = (lo.value, hi.value)
+        records += [lo, hi]
+    tree = recipe.build(segments, ranges)
+
+    groups = [side.name for d in tree.dofs for side in (d.positive, d.negative)]
+    _unknown(path, "body.half_joints", body_spec.half_joints, groups)
+    dofs = []
+    for dof in tree.dofs:
+        changes: dict[str, Any] = {}
+        override = body_spec.dofs.get(dof.name)
+        if override is not None:
+            changes = {"passive": override.passive, "reshape": override.reshape}
+        for side in ("positive", "negative"):
+            group = getattr(dof, side)
+            given = body_spec.half_joints.get(group.name)
+            if given is not None:
+                changes[side] = group.model_copy(
+                    update={
+                        "strength_Nm": given.strength_Nm,
+                        "strength_curve": given.strength_curve,
+                    }
+                )
+        dofs.append(dof.model_copy(update=changes))
+    return tree.model_copy(update={"dofs": dofs}), records
 
 
 def _override_segment(inertia: SegmentInertia, override: Any, path: Path) -> SegmentInertia:
@@ -289,90 +336,121 @@ def _override_segment(inertia: SegmentInertia, override: Any, path: Path) -> Seg
 #: The passive model of a DOF whose file says nothing of it.
 DEFAULT_PASSIVE_MODEL = "limit_torque"
 _EXPONENTIAL_KEYS = ("k1", "k2", "q1", "k3", "k4", "q2")
+_EXPONENTIAL_UNITS = ("N·m", "1/rad", "deg", "N·m", "1/rad", "deg")
 
 
-def _passive(
-    dof: str, spec: DofSpec | None, limits: tuple[float, float], path: Path
-) -> tuple[PassiveTorque, list[Parameter]]:
+def _passive(dof: TreeDofSpec, key: str, path: Path) -> tuple[PassiveTorque, list[Parameter]]:
     """The passive torque of ``dof`` and its parameter records: the model the file names
-    (default ``limit_torque``, anchored at the anatomical range of motion, not at the file's
-    ``range_deg``: extending the range lets the joint into the tissue's steep rise past its
-    limit), reshaped near the limits of the range ``limits`` [rad] if asked."""
-    override = None if spec is None else spec.passive
-    where = f"{path} body.dofs.{dof}.passive"
-    name = DEFAULT_PASSIVE_MODEL if override is None else override.model
+    (default ``limit_torque``), reshaped near the limits of the DOF's range if asked.
+
+    The limit-torque convention is anchored at the anatomical range of motion of a DOF the
+    package has data for, not at the file's ``range_deg`` (extending the range lets the joint
+    into the tissue's steep rise past its limit); a DOF of the file's own at its range."""
+    override, name = dof.passive, dof.name
+    where = f"{path} {key}.passive"
+    model_name = DEFAULT_PASSIVE_MODEL if override is None else override.model
     table = parameters.load("joints")
     chosen = Parameter(
-        f"joints.{dof}.passive.model",
-        name,
+        f"joints.{name}.passive.model",
+        model_name,
         "",
         "the default passive model" if override is None else where,
         "estimate" if override is None else "user",
     )
     if isinstance(override, NoPassiveSpec):
         return NoPassive(), [chosen]
-    if name == "limit_torque":
-        prefix = f"joints.{dof}.passive.limit_torque."
-        limit, decade = table[prefix + "limit"], table[prefix + "decade"]
-        lower, upper = table[f"joints.{dof}.range.lower"], table[f"joints.{dof}.range.upper"]
-        given = {} if override is None else override.model_dump()
-        limit = (
-            limit if given.get("limit_Nm") is None else limit.overridden(given["limit_Nm"], where)
-        )
-        decade = (
-            decade if given.get("decade") is None else decade.overridden(given["decade"], where)
-        )
-        lower = (
-            lower if given.get("lower_deg") is None else lower.overridden(given["lower_deg"], where)
-        )
-        upper = (
-            upper if given.get("upper_deg") is None else upper.overridden(given["upper_deg"], where)
-        )
-        if not lower.value < upper.value:
-            raise ProblemError(
-                path,
-                f"body.dofs.{dof}.passive",
-                [lower.value, upper.value],
-                "lower_deg < upper_deg",
-            )
-        anatomical = (math.radians(lower.value), math.radians(upper.value))
-        model: PassiveTorque = limit_torque(*anatomical, limit.value, decade.value)
-        records = [chosen, limit, decade, *_derived(dof, model)]
-    else:
-        prefix = f"joints.{dof}.passive.gymnast_fit."
-        records = [table[prefix + k] for k in _EXPONENTIAL_KEYS]
-        if isinstance(override, ExponentialPassiveSpec):
-            given = (
-                override.k1_Nm,
-                override.k2_per_rad,
-                override.q1_deg,
-                override.k3_Nm,
-                override.k4_per_rad,
-                override.q2_deg,
-            )
-            records = [r.overridden(v, where) for r, v in zip(records, given, strict=True)]
-        records = [
-            replace(r, name=f"joints.{dof}.passive.{k}")
-            for r, k in zip(records, _EXPONENTIAL_KEYS, strict=True)
-        ]
-        k1, k2, q1, k3, k4, q2 = (r.value for r in records)
-        model = ExponentialPassive(k1, k2, math.radians(q1), k3, k4, math.radians(q2))
+    if model_name == "limit_torque":
+        model, records = _limit_torque(dof, override, where, key, path)
         records = [chosen, *records]
-    if spec is not None and spec.reshape is not None:
-        shape = spec.reshape
+    elif isinstance(override, ExponentialPassiveSpec):
+        given = [getattr(override, f) for f in ExponentialPassiveSpec.model_fields if f != "model"]
+        records = [
+            chosen,
+            *(
+                Parameter(f"joints.{name}.passive.{k}", v, unit, where, "user")
+                for k, v, unit in zip(_EXPONENTIAL_KEYS, given, _EXPONENTIAL_UNITS, strict=True)
+            ),
+        ]
+        model = _exponential(records[1:])
+    else:
+        prefix = f"joints.{name}.passive.gymnast_fit."
+        if prefix + "k1" not in table:
+            fitted = sorted({p.split(".")[1] for p in table if ".gymnast_fit." in p})
+            expected = f"a model other than gymnast_fit (fitted only for {fitted})"
+            raise ProblemError(path, f"{key}.passive.model", model_name, expected)
+        records = [
+            replace(table[prefix + k], name=f"joints.{name}.passive.{k}") for k in _EXPONENTIAL_KEYS
+        ]
+        model = _exponential(records)
+        records = [chosen, *records]
+    if dof.reshape is not None:
+        shape = dof.reshape
+        lower, upper = (math.radians(v) for v in dof.range_deg)
         model = ReshapedPassive(
-            model, *limits, math.radians(shape.width_deg), shape.slope_Nm_per_rad, shape.step_Nm
+            model,
+            lower,
+            upper,
+            math.radians(shape.width_deg),
+            shape.slope_Nm_per_rad,
+            shape.step_Nm,
         )
         records.append(
             Parameter(
-                f"joints.{dof}.passive.reshape",
+                f"joints.{name}.passive.reshape",
                 shape.model_dump(),
                 "deg, N·m/rad, N·m",
-                f"{path} body.dofs.{dof}.reshape",
+                f"{path} {key}.reshape",
                 "user",
             )
         )
     return model, records
+
+
+def _exponential(records: list[Parameter]) -> ExponentialPassive:
+    """The double exponential of six records k1, k2, q1 [deg], k3, k4, q2 [deg]."""
+    k1, k2, q1, k3, k4, q2 = (r.value for r in records)
+    return ExponentialPassive(k1, k2, math.radians(q1), k3, k4, math.radians(q2))
+
+
+def _limit_torque(
+    dof: TreeDofSpec,
+    override: LimitTorquePassiveSpec | None,
+    where: str,
+    key: str,
+    path: Path,
+) -> tuple[ExponentialPassive, list[Parameter]]:
+    """The limit-torque convention of ``dof`` with the file's values over the shipped ones."""
+    table, name = parameters.load("joints"), dof.name
+    shipped = f"joints.{name}.range.lower" in table
+    prefix = f"joints.{name if shipped else 'any_dof'}.passive.limit_torque."
+    limit, decade = table[prefix + "limit"], table[prefix + "decade"]
+    if shipped:
+        lower, upper = table[f"joints.{name}.range.lower"], table[f"joints.{name}.range.upper"]
+    else:
+        source = f"{path} {key}.range_deg"
+        lower, upper = (
+            Parameter(f"joints.{name}.passive.{end}", value, "deg", source, "user")
+            for end, value in zip(("lower", "upper"), dof.range_deg, strict=True)
+        )
+    if override is not None:
+        if override.limit_Nm is not None:
+            limit = limit.overridden(override.limit_Nm, where)
+        if override.decade is not None:
+            decade = decade.overridden(override.decade, where)
+        if override.lower_deg is not None:
+            lower = lower.overridden(override.lower_deg, where)
+        if override.upper_deg is not None:
+            upper = upper.overridden(override.upper_deg, where)
+    if not lower.value < upper.value:
+        raise ProblemError(
+            path, f"{key}.passive", [lower.value, upper.value], "lower_deg < upper_deg"
+        )
+    model = limit_torque(
+        math.radians(lower.value), math.radians(upper.value), limit.value, decade.value
+    )
+    limit = replace(limit, name=f"joints.{name}.passive.limit_torque.limit")
+    decade = replace(decade, name=f"joints.{name}.passive.limit_torque.decade")
+    return model, [limit, decade, *_derived(name, model)]
 
 
 def _derived(dof: str, model: ExponentialPassive) -> list[Parameter]:
@@ -398,23 +476,29 @@ def _derived(dof: str, model: ExponentialPassive) -> list[Parameter]:
 
 
 def _strength(
-    group: str, override: HalfJointSpec | None, body: BodyModel, spec: ProblemSpec, path: Path
+    group: TreeHalfJointSpec, key: str, body: BodyModel, spec: ProblemSpec, path: Path
 ) -> tuple[Strength, Parameter]:
-    where = f"{path} body.half_joints.{group}"
-    if override is not None and override.strength_Nm is not None:
-        value = override.strength_Nm
-        return ConstantStrength(value), Parameter(f"strength.{group}", value, "N·m", where, "user")
-    if override is not None and override.strength_curve is not None:
-        curve = override.strength_curve
-        index = _dof_index(body, curve.dof, f"body.half_joints.{group}.strength_curve.dof", path)
+    """The strength of a muscle group: the file's value or curve, else the shipped default of
+    a group of that name."""
+    where = f"{path} {key}"
+    name = group.name
+    if group.strength_Nm is not None:
+        value = group.strength_Nm
+        return ConstantStrength(value), Parameter(f"strength.{name}", value, "N·m", where, "user")
+    if group.strength_curve is not None:
+        curve = group.strength_curve
+        index = _dof_index(body, curve.dof, f"{key}.strength_curve.dof", path)
         model = TabulatedStrength(
             index, tuple(math.radians(a) for a in curve.angle_deg), tuple(curve.strength_Nm)
         )
         table = list(zip(curve.angle_deg, curve.strength_Nm, strict=True))
-        return model, Parameter(f"strength.{group}", table, "[deg, N·m]", where, "user")
+        return model, Parameter(f"strength.{name}", table, "[deg, N·m]", where, "user")
+    if name not in known_groups():
+        expected = f"a strength_Nm or strength_curve (shipped defaults only for {known_groups()})"
+        raise ProblemError(path, f"{key}.strength_Nm", MISSING, expected)
     b = spec.body
     return default_strength(
-        group, sex=b.sex, stature=b.stature_m, body_mass=b.mass_kg, age=b.age_years
+        name, sex=b.sex, stature=b.stature_m, body_mass=b.mass_kg, age=b.age_years
     )
 
 

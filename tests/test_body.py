@@ -126,9 +126,12 @@ def test_half_joints_follow_dof_order() -> None:
 @pytest.mark.parametrize(
     ("dofs", "key"),
     [
-        ([Dof("b", "a", (0, 0, 0), (0, 1, 0), 0, 1, "r", "p", "n")], "body.dofs.b.parent"),
-        ([Dof("a", None, (0, 0, 0), (0, 0, 0), 0, 1, "r", "p", "n")], "body.dofs.a.axis"),
-        ([Dof("a", None, (0, 0, 0), (0, 1, 0), 1, 1, "r", "p", "n")], "body.dofs.a.range_deg"),
+        ([Dof("b", "a", (0, 0, 0), (0, 1, 0), 0, 1, "p", "n", ("r", "r"))], "body.dofs.b.parent"),
+        ([Dof("a", None, (0, 0, 0), (0, 0, 0), 0, 1, "p", "n", ("r", "r"))], "body.dofs.a.axis"),
+        (
+            [Dof("a", None, (0, 0, 0), (0, 1, 0), 1, 1, "p", "n", ("r", "r"))],
+            "body.dofs.a.range_deg",
+        ),
     ],
 )
 def test_malformed_trees_are_rejected(dofs: list[Dof], key: str) -> None:

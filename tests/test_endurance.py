@@ -58,12 +58,16 @@ def test_frey_law_avin_is_infinite_without_load() -> None:
     assert np.isfinite(times[2])
 
 
-def test_frey_law_avin_unknown_region_names_known_ones() -> None:
+def test_frey_law_avin_region_without_data_takes_the_general_fit_and_says_so() -> None:
     model = endurance_model("frey_law_avin")
-    with pytest.raises(ProblemError, match=r"'hip'.*shoulder"):
-        model.endurance_time_s(30.0, "hip")
-    with pytest.raises(ProblemError, match="'neck'"):
-        model.parameters(["shoulder", "neck"])
+    assert model.endurance_time_s(30.0, "hip") == model.endurance_time_s(30.0, "general")
+    assert model.endurance_time_s(30.0, "hip") != model.endurance_time_s(30.0, "shoulder")
+    records = {p.name: p for p in model.parameters(["shoulder", "hip"])}
+    hip = records["endurance.frey_law_avin.hip.b0"]
+    assert "no fit for a region named 'hip'" in hip.source
+    general = model.parameters(["general"])[0]
+    assert general.name.endswith("general.b0") and hip.value == general.value
+    assert "no fit" not in records["endurance.frey_law_avin.shoulder.b0"].source
 
 
 @pytest.mark.parametrize(("load", "minutes"), [(20.0, 6.5), (50.0, 1.1), (100.0, 0.1)])

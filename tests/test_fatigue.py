@@ -113,11 +113,14 @@ def test_holding_time_parameters_name_what_is_used() -> None:
     ]
 
 
-def test_unknown_region_is_a_problem_error() -> None:
-    with pytest.raises(ProblemError, match=r"'wrist'.*shoulder"):
-        holding(["shoulder", "wrist"])
-    with pytest.raises(ProblemError, match="'wrist'"):
-        ThreeCompartmentFatigue(["wrist"])
+def test_a_region_without_data_takes_the_general_rates_and_says_so() -> None:
+    model = ThreeCompartmentFatigue(["shoulder", "wrist"])
+    general = {p.name: p for p in ThreeCompartmentFatigue(["general"]).parameters()}
+    records = {p.name: p for p in model.parameters()}
+    wrist = records["fatigue.frey_law_2012.wrist.recovery_rate"]
+    assert "no fit for a region named 'wrist'" in wrist.source
+    assert wrist.value == general["fatigue.frey_law_2012.general.recovery_rate"].value
+    assert "no fit" not in records["fatigue.frey_law_2012.shoulder.recovery_rate"].source
 
 
 def test_negative_time_step_is_a_problem_error() -> None:

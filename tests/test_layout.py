@@ -1,6 +1,7 @@
 """The package's layers: every import runs downward (or within one group), so the tree reads
-bottom-up like the data's path: body and problem-file specs, then biomechanics and IK, the
-resolved problem, the fatigue-driven adjustment, the simulation, output, runs, the CLI."""
+bottom-up like the data's path: problem-file specs, the body (the built-in models are trees
+a file could hold), biomechanics and IK, the resolved problem, the fatigue-driven
+adjustment, the simulation, output, runs, the CLI."""
 
 from __future__ import annotations
 
@@ -15,22 +16,22 @@ FLOORS = {
     "interrupt": 0,
     "frames": 0,
     "data": 1,
-    "body": 2,
     "spec": 2,
-    "biomech": 3,
-    "ik": 3,
-    "problem": 4,
-    "static": 5,
-    "adjustment": 5,
-    "simulation": 6,
-    "description": 6,
-    "output": 7,
-    "runs": 8,
-    "api": 9,
-    "cli": 10,
-    "console": 11,
-    "__init__": 12,
-    "__main__": 12,
+    "body": 3,
+    "biomech": 4,
+    "ik": 4,
+    "problem": 5,
+    "static": 6,
+    "adjustment": 6,
+    "simulation": 7,
+    "description": 7,
+    "output": 8,
+    "runs": 9,
+    "api": 10,
+    "cli": 11,
+    "console": 12,
+    "__init__": 13,
+    "__main__": 13,
 }
 
 

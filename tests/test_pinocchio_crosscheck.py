@@ -24,11 +24,12 @@ def _pinocchio_model(model: dict) -> tuple[object, list[str]]:
     pm.gravity.linear = np.array([0.0, 0.0, -model["gravity_m_s2"]])
     joint_id, origin = {None: 0}, {None: np.zeros(3)}
     for dof in model["dofs"]:
-        placement = pin.SE3(np.eye(3), np.array(dof["origin_m"]) - origin[dof["parent"]])
+        parent = dof.get("parent")
+        placement = pin.SE3(np.eye(3), np.array(dof["origin_m"]) - origin[parent])
         joint = pin.JointModelRevoluteUnaligned(np.array(dof["axis"]))
-        joint_id[dof["name"]] = pm.addJoint(joint_id[dof["parent"]], joint, placement, dof["name"])
+        joint_id[dof["name"]] = pm.addJoint(joint_id[parent], joint, placement, dof["name"])
         origin[dof["name"]] = np.array(dof["origin_m"])
-    masses = [(s["dof"], s["mass_kg"], s["com_m"]) for s in model["segments"]]
+    masses = [(s.get("dof"), s["mass_kg"], s["com_m"]) for s in model["segments"]]
     masses += [(ld["dof"], ld["mass_kg"], ld["point_m"]) for ld in model["loads"]]
     for dof, mass, point in masses:
         if dof is not None:

@@ -79,30 +79,21 @@ class FreyLawAvin:
     power law goes on (``ET < b0``).
     """
 
-    coefficients: Mapping[str, tuple[Parameter, Parameter]]
+    table: Mapping[str, Parameter]
     name: str = field(default="frey_law_avin", init=False)
 
     @classmethod
     def from_data(cls) -> FreyLawAvin:
         """The model with the shipped table (``endurance.frey_law_avin.<region>.b0/b1``)."""
-        prefix = "endurance.frey_law_avin."
-        regions = dict.fromkeys(
-            name.removeprefix(prefix).split(".")[0]
-            for name in parameters.load("endurance")
-            if name.startswith(prefix)
-        )
-        return cls(
-            {
-                region: (_data(f"frey_law_avin.{region}.b0"), _data(f"frey_law_avin.{region}.b1"))
-                for region in regions
-            }
-        )
+        return cls(parameters.load("endurance"))
 
     def _coefficients(self, region: str) -> tuple[Parameter, Parameter]:
-        if region not in self.coefficients:
-            known = ", ".join(self.coefficients)
-            raise ProblemError(None, "region", region, f"a joint region of {self.name}: {known}")
-        return self.coefficients[region]
+        """``b0`` and ``b1`` of ``region`` (a region without data: the general fit)."""
+        prefix = "endurance.frey_law_avin."
+        return (
+            parameters.regional(self.table, prefix, region, "b0"),
+            parameters.regional(self.table, prefix, region, "b1"),
+        )
 
     def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
         """Endurance time [s] of each load [%MVC] for the muscle groups of ``region``."""

@@ -71,18 +71,13 @@ def _with_user_value(parameter: Parameter, value: float | None, argument: str) -
 
 
 def _region_rates(regions: Sequence[str], rate: str) -> dict[str, Parameter]:
-    """Frey-Law 2012 Table 1 ``rate`` (fatigue_rate / recovery_rate) of each distinct region."""
+    """Frey-Law 2012 Table 1 ``rate`` (fatigue_rate / recovery_rate) of each distinct region
+    (a region without data: the general one)."""
     table = parameters.load("fatigue")
-    known = dict.fromkeys(
-        name.removeprefix(_REGION_TABLE).split(".")[0]
-        for name in table
-        if name.startswith(_REGION_TABLE)
-    )
-    for region in regions:
-        if region not in known:
-            expected = f"a joint region of Frey-Law 2012: {', '.join(known)}"
-            raise ProblemError(None, "region", region, expected)
-    return {region: table[f"{_REGION_TABLE}{region}.{rate}"] for region in dict.fromkeys(regions)}
+    return {
+        region: parameters.regional(table, _REGION_TABLE, region, rate)
+        for region in dict.fromkeys(regions)
+    }
 
 
 def _per_half_joint(regions: Sequence[str], rates: dict[str, Parameter]) -> np.ndarray:

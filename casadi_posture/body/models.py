@@ -2,7 +2,8 @@
 
 World frame at the right shoulder joint centre: x forward, y to the subject's
 left, z up. Segment lengths, masses and centres of mass come in already
-scaled (de Leva 1996); ranges in rad.
+scaled (de Leva 1996); ranges in degrees. Each model is written as the tree a problem
+file can hold (`body.tree`), so nothing downstream knows a model by name.
 """
 
 from __future__ import annotations
@@ -11,7 +12,14 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
-from casadi_posture.body.tree import BodyModel, Dof, Landmark, Segment, Vector3
+from casadi_posture.body.tree import Vector3
+from casadi_posture.spec.schema import (
+    TreeDofSpec,
+    TreeHalfJointSpec,
+    TreeLandmarkSpec,
+    TreeSegmentSpec,
+    TreeSpec,
+)
 
 
 class SegmentGeometry(Protocol):
@@ -24,9 +32,8 @@ class SegmentGeometry(Protocol):
     def com_distance(self) -> float: ...
 
 
-Builder = Callable[
-    [Mapping[str, SegmentGeometry], Mapping[str, tuple[float, float]], float], BodyModel
-]
+#: A model's tree from its scaled segments and its DOF ranges [deg].
+Builder = Callable[[Mapping[str, SegmentGeometry], Mapping[str, tuple[float, float]]], TreeSpec]
 
 
 @dataclass(frozen=True)
@@ -42,12 +49,33 @@ class ModelRecipe:
 
 _DOWN = (0.0, 0.0, -1.0)
 _RIGHT = (0.0, -1.0, 0.0)
-_SAGITTAL_FLEXION_AXIS = (0.0, -1.0, 0.0)
-_FRONTAL_FLEXION_AXIS = (-1.0, 0.0, 0.0)
+_SAGITTAL_FLEXION_AXIS = [0.0, -1.0, 0.0]
+_FRONTAL_FLEXION_AXIS = [-1.0, 0.0, 0.0]
 
 
-def _along(direction: Vector3, distance: float) -> Vector3:
-    return (direction[0] * distance, direction[1] * distance, direction[2] * distance)
+def _along(direction: Vector3, distance: float) -> list[float]:
+    return [direction[0] * distance, direction[1] * distance, direction[2] * distance]
+
+
+def _dof(
+    name: str,
+    parent: str | None,
+    origin: list[float],
+    axis: list[float],
+    range_deg: tuple[float, float],
+    region: str,
+    groups: tuple[str, str],
+) -> TreeDofSpec:
+    """A DOF whose two muscle groups take the shipped strength of their names."""
+    return TreeDofSpec(
+        name=name,
+        parent=parent,
+        origin_m=origin,
+        axis=axis,
+        range_deg=list(range_deg),
+        positive=TreeHalfJointSpec(name=groups[0], region=region),
+        negative=TreeHalfJointSpec(name=groups[1], region=region),
+    )
 
 
 def _straight_arm(
@@ -55,7 +83,7 @@ def _straight_arm(
     direction: Vector3,
     upper_arm_dof: str | None,
     forearm_dof: str,
-) -> tuple[list[Segment], list[Landmark]]:
+) -> tuple[list[TreeSegmentSpec], list[TreeLandmarkSpec]]:
     """Segments and landmarks of a straight right arm from the shoulder along ``direction``.
 
     The upper arm and the elbow move with ``upper_arm_dof`` (``None``: fixed);
@@ -63,105 +91,88 @@ def _straight_arm(
     """
     ua, fa, hand = segments["upper_arm"], segments["forearm"], segments["hand"]
     elbow, wrist = ua.length, ua.length + fa.length
+    parts = [
+        ("upper_arm", upper_arm_dof, ua, 0.0, "shoulder", "elbow"),
+        ("forearm", forearm_dof, fa, elbow, "elbow", "wrist"),
+        ("hand", forearm_dof, hand, wrist, "wrist", "knuckles"),
+    ]
     body_segments = [
-        Segment(
-            "upper_arm",
-            upper_arm_dof,
-            ua.mass,
-            _along(direction, ua.com_distance),
-            "shoulder",
-            "elbow",
-        ),
-        Segment(
-            "forearm",
-            forearm_dof,
-            fa.mass,
-            _along(direction, elbow + fa.com_distance),
-            "elbow",
-            "wrist",
-        ),
-        Segment(
-            "hand",
-            forearm_dof,
-            hand.mass,
-            _along(direction, wrist + hand.com_distance),
-            "wrist",
-            "knuckles",
-        ),
+        TreeSegmentSpec(
+            name=name,
+            dof=dof,
+            mass_kg=geometry.mass,
+            com_m=_along(direction, start + geometry.com_distance),
+            proximal=proximal,
+            distal=distal,
+        )
+        for name, dof, geometry, start, proximal, distal in parts
     ]
     landmarks = [
-        Landmark("shoulder", None, (0.0, 0.0, 0.0)),
-        Landmark("elbow", upper_arm_dof, _along(direction, elbow)),
-        Landmark("wrist", forearm_dof, _along(direction, wrist)),
-        Landmark("knuckles", forearm_dof, _along(direction, wrist + hand.length)),
+        TreeLandmarkSpec(name="shoulder", position_m=[0.0, 0.0, 0.0]),
+        TreeLandmarkSpec(name="elbow", dof=upper_arm_dof, position_m=_along(direction, elbow)),
+        TreeLandmarkSpec(name="wrist", dof=forearm_dof, position_m=_along(direction, wrist)),
+        TreeLandmarkSpec(
+            name="knuckles", dof=forearm_dof, position_m=_along(direction, wrist + hand.length)
+        ),
     ]
     return body_segments, landmarks
 
 
 def sagittal_arm(
-    segments: Mapping[str, SegmentGeometry],
-    ranges: Mapping[str, tuple[float, float]],
-    gravity: float,
-) -> BodyModel:
+    segments: Mapping[str, SegmentGeometry], ranges: Mapping[str, tuple[float, float]]
+) -> TreeSpec:
     """The paper's sagittal arm: shoulder flexion and elbow flexion, hand rigid with the forearm.
 
     Zero posture: arm hanging straight down. Shoulder flexion raises the arm
     forward, elbow flexion bends the forearm forward/up; both axes point to
     the subject's right (-y).
     """
-    elbow = _along(_DOWN, segments["upper_arm"].length)
     dofs = [
-        Dof(
+        _dof(
             "shoulder_flexion",
             None,
-            (0.0, 0.0, 0.0),
+            [0.0, 0.0, 0.0],
             _SAGITTAL_FLEXION_AXIS,
-            *ranges["shoulder_flexion"],
+            ranges["shoulder_flexion"],
             "shoulder",
-            "shoulder_flexors",
-            "shoulder_extensors",
+            ("shoulder_flexors", "shoulder_extensors"),
         ),
-        Dof(
+        _dof(
             "elbow_flexion",
             "shoulder_flexion",
-            elbow,
+            _along(_DOWN, segments["upper_arm"].length),
             _SAGITTAL_FLEXION_AXIS,
-            *ranges["elbow_flexion"],
+            ranges["elbow_flexion"],
             "elbow",
-            "elbow_flexors",
-            "elbow_extensors",
+            ("elbow_flexors", "elbow_extensors"),
         ),
     ]
     body_segments, landmarks = _straight_arm(segments, _DOWN, "shoulder_flexion", "elbow_flexion")
-    return BodyModel("sagittal_arm", dofs, body_segments, landmarks, gravity=gravity)
+    return TreeSpec(name="sagittal_arm", dofs=dofs, segments=body_segments, landmarks=landmarks)
 
 
 def frontal_elbow(
-    segments: Mapping[str, SegmentGeometry],
-    ranges: Mapping[str, tuple[float, float]],
-    gravity: float,
-) -> BodyModel:
+    segments: Mapping[str, SegmentGeometry], ranges: Mapping[str, tuple[float, float]]
+) -> TreeSpec:
     """The paper's Fig. 3 case: upper arm fixed, abducted horizontally to the right; only
     the elbow moves, in the frontal plane.
 
     Zero posture: elbow straight, forearm horizontal pointing right (-y).
     Elbow flexion raises the forearm (axis -x); at 90° it points straight up.
     """
-    elbow = _along(_RIGHT, segments["upper_arm"].length)
     dofs = [
-        Dof(
+        _dof(
             "elbow_flexion",
             None,
-            elbow,
+            _along(_RIGHT, segments["upper_arm"].length),
             _FRONTAL_FLEXION_AXIS,
-            *ranges["elbow_flexion"],
+            ranges["elbow_flexion"],
             "elbow",
-            "elbow_flexors",
-            "elbow_extensors",
+            ("elbow_flexors", "elbow_extensors"),
         ),
     ]
     body_segments, landmarks = _straight_arm(segments, _RIGHT, None, "elbow_flexion")
-    return BodyModel("frontal_elbow", dofs, body_segments, landmarks, gravity=gravity)
+    return TreeSpec(name="frontal_elbow", dofs=dofs, segments=body_segments, landmarks=landmarks)
 
 
 MODELS: dict[str, ModelRecipe] = {

@@ -32,8 +32,8 @@ class Dof:
 
     ``origin`` [m] and ``axis`` are in the world frame at the zero posture;
     ``lower``/``upper`` [rad] bound the angle. ``positive`` is the muscle group
-    that drives the angle up, ``negative`` the one that drives it down.
-    ``region`` names the joint region of the strength and endurance tables.
+    that drives the angle up, ``negative`` the one that drives it down;
+    ``regions`` names the joint region of each one's endurance data (positive, negative).
     """
 
     name: str
@@ -42,9 +42,9 @@ class Dof:
     axis: Vector3
     lower: float
     upper: float
-    region: str
     positive: str
     negative: str
+    regions: tuple[str, str] = ("general", "general")
 
 
 @dataclass(frozen=True)
@@ -52,15 +52,15 @@ class Segment:
     """A rigid segment: ``mass`` [kg], centre of mass ``com`` [m, world, zero posture].
 
     ``dof`` is the DOF whose frame carries it (``None``: fixed to the world);
-    ``proximal`` and ``distal`` name the landmarks at its end points.
+    ``proximal`` and ``distal`` name the landmarks at its end points, if any.
     """
 
     name: str
     dof: str | None
     mass: float
     com: Vector3
-    proximal: str
-    distal: str
+    proximal: str | None = None
+    distal: str | None = None
 
 
 @dataclass(frozen=True)
@@ -179,8 +179,8 @@ class BodyModel:
         """The two half-joints of every DOF, positive first, in DOF order."""
         out = []
         for i, dof in enumerate(self.dofs):
-            out.append(HalfJoint(dof.positive, dof.name, i, +1, dof.region))
-            out.append(HalfJoint(dof.negative, dof.name, i, -1, dof.region))
+            out.append(HalfJoint(dof.positive, dof.name, i, +1, dof.regions[0]))
+            out.append(HalfJoint(dof.negative, dof.name, i, -1, dof.regions[1]))
         return out
 
     @property

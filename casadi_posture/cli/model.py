@@ -120,11 +120,11 @@ def describe(problem: str, sets: tuple[str, ...], as_json: bool) -> None:
             [
                 [
                     d["name"],
-                    d["parent"] or "world",
+                    d.get("parent", "world"),
                     _vec(d["origin_m"]),
                     _vec(d["axis"], 3),
                     f"[{d['range_deg'][0]:g}, {d['range_deg'][1]:g}]",
-                    f"{d['half_joints']['positive']} / {d['half_joints']['negative']}",
+                    f"{d['positive']['name']} / {d['negative']['name']}",
                 ]
                 for d in data["dofs"]
             ],
@@ -135,7 +135,7 @@ def describe(problem: str, sets: tuple[str, ...], as_json: bool) -> None:
         table(
             ["segment", "mass (kg)", "COM (m)", "moved by DOF"],
             [
-                [s["name"], s["mass_kg"], _vec(s["com_m"]), s["dof"] or "(fixed)"]
+                [s["name"], s["mass_kg"], _vec(s["com_m"]), s.get("dof", "(fixed)")]
                 for s in data["segments"]
             ],
         )

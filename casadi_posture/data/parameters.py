@@ -72,6 +72,21 @@ def _collect(
             _collect(item, f"{prefix}.{key}", context, out)
 
 
+#: The joint region whose data a region without its own takes.
+DEFAULT_REGION = "general"
+
+
+def regional(table: dict[str, Parameter], prefix: str, region: str, key: str) -> Parameter:
+    """Parameter ``<prefix><region>.<key>`` of ``table``; a region without data takes the
+    ``general`` one, under the region's name, its source saying so."""
+    name = f"{prefix}{region}.{key}"
+    if name in table:
+        return table[name]
+    general = table[f"{prefix}{DEFAULT_REGION}.{key}"]
+    source = f"no fit for a region named {region!r}: the {DEFAULT_REGION} fit ({general.source})"
+    return replace(general, name=name, source=source)
+
+
 def value(stem: str, name: str) -> Any:
     """The value of parameter ``<stem>.<name>``."""
     return load(stem)[f"{stem}.{name}"].value

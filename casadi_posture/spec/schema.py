@@ -184,8 +184,83 @@ class HalfJointSpec(Strict):
         return self
 
 
+Name = Annotated[str, Field(min_length=1, max_length=100, pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
+#: The most DOFs a tree may have (a whole-body model has about 40).
+MAX_TREE_DOFS = 200
+
+
+class TreeHalfJointSpec(Strict):
+    """A muscle group of a DOF: its strength (left out: the shipped default of a group of
+    that name) and the joint region whose endurance data it takes (default ``general``)."""
+
+    name: Name
+    strength_Nm: StrengthValue | None = None
+    strength_curve: StrengthCurveSpec | None = None
+    region: Name = "general"
+
+    @model_validator(mode="after")
+    def _one(self) -> TreeHalfJointSpec:
+        if self.strength_Nm is not None and self.strength_curve is not None:
+            raise ValueError("either strength_Nm or strength_curve, not both")
+        return self
+
+
+class TreeDofSpec(Strict):
+    """A revolute DOF: its joint centre and axis in the world at the zero posture, its
+    range, its passive torque (left out: the shipped model of a DOF of that name, else the
+    limit-torque convention at this range) and its two muscle groups, ``positive`` driving
+    the angle up and ``negative`` down."""
+
+    name: Name
+    parent: Name | None = None
+    origin_m: Position
+    axis: Direction
+    range_deg: AnglePair
+    passive: PassiveSpec | None = None
+    reshape: ReshapeSpec | None = None
+    positive: TreeHalfJointSpec
+    negative: TreeHalfJointSpec
+
+    _axis = field_validator("axis")(_nonzero)
+    _range = field_validator("range_deg")(_increasing)
+
+
+class TreeSegmentSpec(Strict):
+    """A rigid segment carried by ``dof`` (left out: fixed to the world); ``proximal`` and
+    ``distal`` name the landmarks a stick figure joins for it."""
+
+    name: Name
+    dof: Name | None = None
+    mass_kg: Annotated[float, _between(0.0, 300.0)]
+    com_m: Position
+    proximal: Name | None = None
+    distal: Name | None = None
+
+
+class TreeLandmarkSpec(Strict):
+    """A named point carried by ``dof`` (left out: fixed to the world)."""
+
+    name: Name
+    dof: Name | None = None
+    position_m: Position
+
+
+class TreeSpec(Strict):
+    """A body described in the file: DOFs in topological order (a parent before its
+    children), segments and landmarks, all at the zero posture in the world frame."""
+
+    name: Name = "custom"
+    dofs: list[TreeDofSpec] = Field(min_length=1, max_length=MAX_TREE_DOFS)
+    segments: list[TreeSegmentSpec] = Field(min_length=1, max_length=4 * MAX_TREE_DOFS)
+    landmarks: list[TreeLandmarkSpec] = Field(default=[], max_length=4 * MAX_TREE_DOFS)
+
+
 class BodySpec(Strict):
-    model: str
+    """A built-in ``model`` (with overrides of its DOFs, segments and half-joints) or a
+    ``tree`` of the file's own."""
+
+    model: str | None = None
+    tree: TreeSpec | None = None
     sex: Literal["male", "female"] = "male"
     stature_m: Annotated[float, _between(0.5, 2.5)] = 1.741
     mass_kg: Annotated[float, _between(10.0, 300.0)] = 73.0
@@ -193,6 +268,16 @@ class BodySpec(Strict):
     dofs: dict[str, DofSpec] = {}
     segments: dict[str, SegmentSpec] = {}
     half_joints: dict[str, HalfJointSpec] = {}
+
+    @model_validator(mode="after")
+    def _source(self) -> BodySpec:
+        if (self.model is None) == (self.tree is None):
+            raise ValueError("exactly one of model (a built-in body) or tree (your own)")
+        if self.tree is not None and (self.dofs or self.segments or self.half_joints):
+            raise ValueError(
+                "dofs, segments and half_joints only with model: change a tree in the tree"
+            )
+        return self
 
 
 class LoadSpec(Strict):
