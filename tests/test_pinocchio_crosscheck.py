@@ -8,6 +8,7 @@ g(q) must equal -τe to 1e-9 N·m.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -40,10 +41,21 @@ def _pinocchio_model(model: dict) -> tuple[object, list[str]]:
     return pm, [d["name"] for d in model["dofs"]]
 
 
-@pytest.mark.parametrize("name", ["holding_m45.toml", "frontal_elbow.toml"])
-def test_torques_match_pinocchio_gravity(name: str) -> None:
+BENCHMARKS = PROBLEMS.parent / "benchmarks" / "problems"
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        PROBLEMS / "holding_m45.toml",
+        PROBLEMS / "frontal_elbow.toml",
+        BENCHMARKS / "humanoid_42.toml",
+    ],
+    ids=lambda p: p.stem,
+)
+def test_torques_match_pinocchio_gravity(path: Path) -> None:
     runner = CliRunner()
-    path = str(PROBLEMS / name)
+    path = str(path)
     described = runner.invoke(main, ["describe", path, "--json"])
     assert described.exit_code == 0, described.output
     pm, dofs = _pinocchio_model(json.loads(described.stdout))
