@@ -153,3 +153,13 @@ def test_describe_prints_a_tree_that_loads_back_to_the_same_body() -> None:
     q = np.random.default_rng(5).uniform(problem.body.lower, problem.body.upper)
     a, b = problem.torque_model().evaluate(q), again.torque_model().evaluate(q)
     assert np.array_equal(a.external, b.external) and np.array_equal(a.active, b.active)
+
+
+def test_the_documented_pendulum_loads_and_is_the_one_tested_here() -> None:
+    text = (PROBLEMS.parent / "docs" / "problem-files.md").read_text()
+    block = next(b for b in text.split("```toml\n")[1:] if b.startswith("[body.tree]"))
+    documented = tomllib.loads(block.split("```")[0])
+    problem = problem_from_data(documented | {"posture_deg": {"swing": 30.0}}, "docs")
+    ours = _tree_problem()
+    assert documented["body"]["tree"]["dofs"] == ours["body"]["tree"]["dofs"]
+    assert problem.body.total_mass == 2.0
