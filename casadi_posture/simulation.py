@@ -2,10 +2,11 @@
 
 Per step of simulated time: solve the IK from the last posture with the current
 fatigue constraint (the other solver takes over a step the first fails or stalls
-on); evaluate the torques; update every half-joint's fatigue over the step at the
-new posture's load (a load above 100 %MVC exhausts the group at once);
-apply the hysteresis; build the constraint for the next step. Every CasADi object
-is built once, before the loop.
+on; a step whose IK inputs did not change, no constraint now or before, keeps the
+last certified posture); evaluate the torques; update every half-joint's fatigue
+over the step at the new posture's load (a load above 100 %MVC exhausts the group at
+once); apply the hysteresis; build the constraint for the next step. Every CasADi
+object is built once, before the loop.
 """
 
 from __future__ import annotations
@@ -62,7 +63,8 @@ class SimulationResult:
     """A simulated hold: its tasks, the name and unit of each level, the timeline, the
     events, why it stopped and solver statistics (wall times [s]). ``ik_failures`` counts
     steps whose posture no solver could certify; ``ik_fallbacks`` the steps the other solver
-    took over after a failure or stall."""
+    took over after a failure or stall; ``ik_reused`` the steps that kept the last
+    certified posture because no constraint applied then or now (the targets are fixed)."""
 
     problem: Problem
     solver: str
@@ -80,6 +82,7 @@ class SimulationResult:
     ik_failures: int
     ik_fallbacks: int
     ik_iterations: int
+    ik_reused: int
 
     def __repr__(self) -> str:
         return (
@@ -178,6 +181,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
     events: list[Event] = []
     state, q, torques = fatigue.initial_state(), problem.posture.copy(), None
     ik_time, failures, fallbacks, iterations, held = 0.0, 0, 0, 0, True
+    result, before, reused = None, None, 0
     stop: Stop = "completed"
     for step in range(spec.simulation.steps):
         now = step * dt
@@ -198,8 +202,13 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
                 )
             )
         tic = time.perf_counter()
-        result = solvers.primary.solve(q, inequality)
-        iterations += result.iterations
+        unchanged = result is not None and result.success and inequality is None and before is None
+        before = inequality
+        if unchanged:
+            reused += 1
+        else:
+            result = solvers.primary.solve(q, inequality)
+            iterations += result.iterations
         if not result.success:
             other = solvers.fallback().solve(q, inequality)
             iterations += other.iterations
@@ -321,6 +330,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         failures,
         fallbacks,
         iterations,
+        reused,
     )
 
 

@@ -15,6 +15,8 @@ from conftest import PROBLEMS
 
 from casadi_posture.adjustment.constraint import ConstraintSettings, FatigueConstraint
 from casadi_posture.cli import main
+from casadi_posture.ik.solvers import make_solver
+from casadi_posture.output.results import summary
 from casadi_posture.problem import load_problem
 from casadi_posture.simulation import constraint_settings, simulate
 
@@ -336,3 +338,23 @@ def test_no_shipped_scenario_holds_a_load_above_strength(path: Path) -> None:
     result = simulate(load_problem(path), "nullspace")
     assert not [e for e in result.events if e.kind == "over_strength"]
     assert result.timeline.load.max() <= 100.0
+
+
+@pytest.mark.parametrize("solver", ["lexicographic", "nullspace"])
+def test_unchanged_steps_keep_the_posture_a_new_solve_would_give(solver: str) -> None:
+    """With no constraint at a step and the one before, the IK inputs are those of the last
+    solve (fixed targets, same start): the step keeps that posture instead of solving
+    again. Solving such a step anyway from the previous posture gives the same one."""
+    problem = load_problem(PROBLEMS / "holding_m45.toml", {"simulation.duration_s": 300.0})
+    result = simulate(problem, solver)
+    tl = result.timeline
+    free = np.isnan(tl.goal)
+    kept = [k for k in range(1, tl.time.size) if free[k] and free[k - 1]]
+    assert result.ik_reused == len(kept) > 100
+    assert result.ik_reused < tl.time.size - 1  # the constraint came on: those steps solved
+    check = make_solver(solver, problem.hierarchy())
+    for k in kept[:: max(1, len(kept) // 5)]:
+        again = check.solve(tl.q[k - 1])
+        assert again.success
+        assert np.max(np.abs(again.q - tl.q[k])) < 1e-7
+    assert summary(result)["solver_statistics"]["ik_reused"] == result.ik_reused

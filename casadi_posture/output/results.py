@@ -114,6 +114,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
             "ik_iterations": result.ik_iterations,
             "ik_failures": result.ik_failures,
             "ik_fallbacks": result.ik_fallbacks,
+            "ik_reused": result.ik_reused,
         },
     }
 
