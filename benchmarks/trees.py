@@ -15,8 +15,9 @@ trees and their tasks:
 - 42: lumbar and thoracic spine (3 + 3), neck and head (3 + 3), clavicles (2 + 2),
   both arms and legs; the same four levels.
 
-Targets are the forward kinematics of a random posture (seeded by n) within the middle
-half of every range, so every level above the posture is reachable; the posture level
+Targets are the forward kinematics of a random posture (seeded by n), within the middle
+half of every limb's range, the trunk, neck and shoulder girdle near upright, so every
+level above the posture is reachable; the posture level
 pulls toward the upright zero posture (clipped into the ranges). Segment masses are
 rough de Leva (1996) shares of 73 kg and strengths rough adult values: these bodies
 measure speed, not people.
@@ -144,7 +145,7 @@ def _arm(b: _Builder, side: str, parent: str | None, shoulder: list[float], full
             (list(_FLEX), _mirror((-1.0, 0.0, 0.0), side, (True, False, False)), [0, 0, 1.0]),
             ((-60, 180), (-30, 180), (-90, 70)),
             "shoulder",
-            60.0,
+            100.0,
         )
     else:
         upper = b.dof(
@@ -266,23 +267,23 @@ def _spine(b: _Builder, n: int) -> str:
     if n == 28:
         lumbar = b.dof(
             "lumbar_flexion", None, [0, 0, 1.05], trunk[0], (-30, 80), "trunk",
-            ("lumbar_flexors", "lumbar_extensors"), (150.0, 200.0),
+            ("lumbar_flexors", "lumbar_extensors"), (250.0, 300.0),
         )  # fmt: skip
         lumbar = b.dof(
             "lumbar_bending", lumbar, [0, 0, 1.05], trunk[1], (-30, 30), "trunk",
-            ("lumbar_left", "lumbar_right"), (120.0, 120.0),
+            ("lumbar_left", "lumbar_right"), (240.0, 240.0),
         )  # fmt: skip
         b.segment("trunk", lumbar, 30.0, [0.0, 0.0, 1.30])
         b.segment("head", lumbar, 5.1, [0.0, 0.0, 1.62])
         return lumbar
     limits = ((-30, 80), (-30, 30), (-40, 40))
-    lumbar = b.joint3("lumbar", None, [0, 0, 1.05], trunk, limits, "trunk", 180.0)
+    lumbar = b.joint3("lumbar", None, [0, 0, 1.05], trunk, limits, "trunk", 300.0)
     b.segment("abdomen", lumbar, 11.7, [0.0, 0.0, 1.15])
-    thoracic = b.joint3("thoracic", lumbar, [0, 0, 1.25], trunk, limits, "trunk", 150.0)
+    thoracic = b.joint3("thoracic", lumbar, [0, 0, 1.25], trunk, limits, "trunk", 250.0)
     b.segment("thorax", thoracic, 18.0, [0.0, 0.0, 1.38])
-    neck = b.joint3("neck", thoracic, [0, 0, 1.50], trunk, ((-40, 60),) * 3, "general", 30.0)
+    neck = b.joint3("neck", thoracic, [0, 0, 1.50], trunk, ((-40, 60),) * 3, "general", 60.0)
     b.segment("neck", neck, 1.0, [0.0, 0.0, 1.54])
-    head = b.joint3("head", neck, [0, 0, 1.58], trunk, ((-20, 20),) * 3, "general", 20.0)
+    head = b.joint3("head", neck, [0, 0, 1.58], trunk, ((-20, 20),) * 3, "general", 40.0)
     b.segment("head", head, 4.1, [0.0, 0.0, 1.66])
     b.landmark("head_top", head, [0.0, 0.0, 1.75])
     return thoracic
@@ -295,11 +296,11 @@ def _clavicle(b: _Builder, side: str, parent: str) -> str:
         f"clavicle_elevation{s}",
         parent,
         [0.0, y, 1.42],
-        _mirror((1.0, 0.0, 0.0), side, (True, False, False)),
+        _mirror((-1.0, 0.0, 0.0), side, (True, False, False)),
         (-10, 40),
         "shoulder",
         (f"shoulder_elevators{s}", f"shoulder_depressors{s}"),
-        (40.0, 30.0),
+        (150.0, 120.0),
     )
     protraction = b.dof(
         f"clavicle_protraction{s}",
@@ -309,7 +310,7 @@ def _clavicle(b: _Builder, side: str, parent: str) -> str:
         (-20, 30),
         "shoulder",
         (f"protractors{s}", f"retractors{s}"),
-        (30.0, 30.0),
+        (100.0, 100.0),
     )
     b.segment(f"clavicle{s}", protraction, 0.2, [0.0, 2 * y + (0.08 if y > 0 else -0.08), 1.42])
     return protraction
@@ -356,7 +357,13 @@ def problem_data(n: int) -> dict[str, Any]:
     body = problem_from_data(draft, f"humanoid_{n}").body
     rng = np.random.default_rng(n)
     middle, half = (body.lower + body.upper) / 2, (body.upper - body.lower) / 2
-    q_target = middle + 0.5 * half * rng.uniform(-1.0, 1.0, body.n)
+    limbs = np.array(
+        [d.name.endswith(("_r", "_l")) and "clavicle" not in d.name for d in body.dofs]
+    )
+    upright = np.clip(np.zeros(body.n), body.lower, body.upper)
+    centre = np.where(limbs, middle, upright)  # the trunk, neck and shoulder girdle upright
+    spread = np.where(limbs, 0.5, 0.05) * half
+    q_target = np.clip(centre + spread * rng.uniform(-1.0, 1.0, body.n), body.lower, body.upper)
     points = {name: _at(body.landmark(name), body.q, q_target) for name in body.landmarks}
     com = _at(body.com(), body.q, q_target)
     tasks: list[dict[str, Any]] = []

@@ -111,17 +111,24 @@ _AXES = {0: "x forward (m)", 1: "y left (m)", 2: "z up (m)"}
 
 
 class _Skeleton:
-    """The body's segments as stick figures: every landmark a segment ends at, over time."""
+    """The body as stick figures over time: each segment from its proximal to its distal
+    landmark when every segment names them, else the tree itself (each joint centre joined
+    to its parent's, each landmark to the joint centre that carries it)."""
 
     def __init__(self, result: SimulationResult) -> None:
         body = result.problem.body
-        self.names = list(dict.fromkeys(n for s in body.segments for n in (s.proximal, s.distal)))
-        self.bones = [
-            (self.names.index(s.proximal), self.names.index(s.distal))
-            for s in body.segments
-            if s.proximal != s.distal
-        ]
-        points = ca.horzcat(*[body.landmark(n) for n in self.names])
+        named = all(s.proximal and s.distal for s in body.segments)
+        if named:
+            ends = [(s.proximal, s.distal) for s in body.segments if s.proximal != s.distal]
+            expressions = {n: body.landmark(n) for pair in ends for n in pair}
+        else:
+            centres = {d.name: body.point(d.name, d.origin) for d in body.dofs}
+            ends = [(d.parent, d.name) for d in body.dofs if d.parent is not None]
+            ends += [(lm.dof, lm.name) for lm in body.landmarks.values() if lm.dof is not None]
+            expressions = centres | {n: body.landmark(n) for n in body.landmarks}
+        self.names = list(expressions)
+        self.bones = [(self.names.index(a), self.names.index(b)) for a, b in ends]
+        points = ca.horzcat(*expressions.values())
         function = ca.Function("points", [body.q], [points]).map(max(result.timeline.time.size, 1))
         q = result.timeline.q.T if result.timeline.time.size else np.zeros((body.n, 1))
         stacked = np.asarray(function(q))  # 3 × (landmarks·steps)
