@@ -42,6 +42,7 @@ test: $(VENV)/.test
 	$(BIN)/python -m pytest
 
 benchmark: $(VENV)/.dev
+	$(BIN)/python benchmarks/scaling.py
 	$(BIN)/python benchmarks/solvers.py
 	$(BIN)/python benchmarks/simulation.py
 	$(BIN)/python benchmarks/whatif.py
