@@ -181,6 +181,21 @@ def test_a_held_joint_is_released_when_the_tasks_pull_it_back() -> None:
     assert result.q == pytest.approx(_reference_solve(h, start), abs=1e-8)
 
 
+def test_a_held_inequality_is_released_when_the_tasks_pull_back_inside() -> None:
+    """j2 starts 0.4 rad above its bound, 0.05 rad above where the tasks alone put it: the
+    first iteration holds the inequality, moving onto aᵀq = b; the solution is the free
+    one, inside, so the inequality must be let go again."""
+    h, start = _case(0)
+    solver = NullspaceSolver(h)
+    free = solver.solve(start).q
+    inequality = Inequality(np.eye(h.body.n)[2], float(free[2] + 0.05))
+    q0 = free + 0.4 * np.eye(h.body.n)[2]
+    assert solver.iteration(q0, inequality)[2] == pytest.approx(inequality.b, abs=1e-12)
+    result = solver.solve(q0, inequality)
+    assert result.success and not result.inequality_active
+    assert result.q == pytest.approx(free, abs=1e-8)
+
+
 def test_a_conflicting_inequality_stalls_within_the_bound_at_its_best_posture() -> None:
     """Joint j0 held 0.35 rad below the only posture that reaches the target: the
     recursion limit-cycles; it must stop within twice the stall window, say so, and return

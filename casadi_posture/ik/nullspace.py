@@ -180,6 +180,14 @@ class _Level:
     identity: bool = False
 
 
+#: The held constraints are tested for release (:meth:`NullspaceSolver._held_step`) on the
+#: first iteration and every ``RETEST``-th after it, besides when they grow, when an
+#: iteration brings no progress and at rest. Every 2nd, 4th or 8th iteration gave the same
+#: iteration counts from warm starts on the benchmark humanoids; every 8th doubled them from
+#: the 28-DOF upright start (117 against 64), where the first steps hold many joints that
+#: the tasks soon pull back.
+RETEST = 4
+
 #: The iteration is accelerated while its step shrinks by less than this factor per
 #: iteration (slow linear convergence; faster contraction is left alone) and is shorter
 #: than ``ACCELERATED_STEP`` [rad]. Longer steps are shaped by the task error clamping and
@@ -413,21 +421,34 @@ class NullspaceSolver:
             held = more
 
     def _held_step(
-        self, q: np.ndarray, dx: np.ndarray, inequality: Inequality | None, held: _Held
+        self,
+        q: np.ndarray,
+        dx: np.ndarray,
+        inequality: Inequality | None,
+        held: _Held,
+        test: bool,
     ) -> tuple[np.ndarray, _Held]:
         """Δq [rad] and the constraints held for it, starting from those ``held`` before.
 
         Baerlocher and Boulic's clamping loop starts every iteration with nothing held and
-        holds what the step, recomputed after each clamp, takes beyond its limit. Here the
-        held set is carried from one iteration to the next, and the release rule is the
-        loop's own first pass: the step with nothing held says where the tasks pull. A held
-        constraint stays held unless that step pulls it back inside its range (Δq_i > 0 at a
-        lower limit, < 0 at an upper one, aᵀΔq < 0 for the inequality); what that step
-        takes beyond a limit is held too, and the loop goes on from there. A joint the
-        original loop would catch only after others are clamped is thus held from the
-        second sweep on instead of after further passes, and none stays held against the
-        pull of the tasks. With nothing held, an iteration is one sweep.
+        holds what the step, recomputed after each clamp, takes beyond its limit: pass
+        after pass, a sweep each. Here the held set is carried from one iteration to the
+        next; the loop adds to it what the step takes beyond a limit, and while it does not
+        grow an iteration costs one sweep.
+
+        Release, when ``test`` (see ``RETEST``), when the held set grew, and at rest (step
+        below ``tolerance``): the loop's own first pass, the step with nothing held, says
+        where the tasks pull. A held constraint stays held unless that step pulls it back
+        inside its range (Δq_i > 0 at a lower limit, < 0 at an upper one, aᵀΔq < 0 for the
+        inequality); what that step takes beyond a limit is held too, and the loop goes on
+        from there. So a constraint is held against the pull of the tasks for at most
+        ``RETEST`` - 1 iterations, and a converged posture is a fixed point of the original
+        loop: at rest, the loop restarted from nothing holds the same set.
         """
+        if held and not test:
+            dq, now = self._clamped_step(q, dx, inequality, held)
+            if now.same(held) and np.abs(dq).max() >= self.options.tolerance:
+                return dq, now
         free = self._sweep(q, dx, inequality, _NOTHING)
         caught = self._caught(q, free, inequality, _NOTHING)
         kept = self._pushed(q, free, inequality, held)
@@ -446,11 +467,14 @@ class NullspaceSolver:
         keep = held.inequality and inequality is not None and float(inequality.a @ dq) >= 0.0
         return _Held(side, keep)
 
-    def _iterate(self, q: np.ndarray, inequality: Inequality | None, held: _Held) -> _Step:
-        """One iteration from ``q`` [rad] with ``held`` carried from the last."""
+    def _iterate(
+        self, q: np.ndarray, inequality: Inequality | None, held: _Held, test: bool = True
+    ) -> _Step:
+        """One iteration from ``q`` [rad] with ``held`` carried from the last, tested for
+        release when ``test``."""
         merit, dx = self._point(q)
         merit[0] = 0.0 if inequality is None else inequality.violation(q)
-        dq, held = self._held_step(q, dx, inequality, held)
+        dq, held = self._held_step(q, dx, inequality, held, test)
         q_next = np.minimum(np.maximum(q + dq, self._lower), self._upper)
         return _Step(merit, q_next, float(np.abs(q_next - q).max()), held)
 
@@ -481,7 +505,8 @@ class NullspaceSolver:
         best_q, shortest = q.copy(), np.inf
         while iterations < limit:
             iterations += 1
-            merit, q_next, step, now = self._iterate(q, inequality, held)
+            test = since > 0 or iterations % RETEST == 1
+            merit, q_next, step, now = self._iterate(q, inequality, held, test)
             if not now.same(held):
                 back = accelerate.abandon()
                 if back is not None:  # the extrapolation left the smooth piece it came from
