@@ -84,9 +84,9 @@ class NumpyReference:
             for jac, dx, damping in [*hard, *((j, e, DAMPING) for j, e in levels)]:
                 jt = jac @ projector
                 u, s, vt = np.linalg.svd(jt, full_matrices=False)
-                damped = s / (s**2 + damping**2)
-                dq = dq + vt.T @ (damped * (u.T @ (dx - jac @ dq)))
-                rank = s > RANK
+                rank = s > RANK  # directions below the threshold take no step either
+                damped = s[rank] / (s[rank] ** 2 + damping**2)
+                dq = dq + vt[rank].T @ (damped * (u[:, rank].T @ (dx - jac @ dq)))
                 projector = projector - vt[rank].T @ vt[rank]
             q_next = q + dq
             low = ~clamped & (q_next < self.lower - 1e-12)
