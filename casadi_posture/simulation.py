@@ -24,7 +24,7 @@ from casadi_posture.adjustment.constraint import ConstraintSettings, Event, Fati
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
-from casadi_posture.ik.solvers import SOLVER_NAMES, Solver, make_solver
+from casadi_posture.ik.solvers import SOLVER_NAMES, Solver, cached_solver
 from casadi_posture.ik.tasks import Line, Task
 from casadi_posture.problem import Problem
 from casadi_posture.static import STRENGTH_PCT_MVC
@@ -125,7 +125,7 @@ class _Solvers:
     """The problem's solver and, built on first need, the other one to fall back to."""
 
     def __init__(self, name: str, problem: Problem, hierarchy: TaskHierarchy) -> None:
-        self.primary = make_solver(name, hierarchy, problem.spec.solver)
+        self.primary = cached_solver(name, hierarchy, problem.spec.solver)
         self.other_name = next(n for n in SOLVER_NAMES if n != name)
         self._problem, self._hierarchy = problem, hierarchy
         self._other: Solver | None = None
@@ -133,7 +133,7 @@ class _Solvers:
     def fallback(self) -> Solver:
         if self._other is None:
             spec = self._problem.spec.solver
-            self._other = make_solver(self.other_name, self._hierarchy, spec)
+            self._other = cached_solver(self.other_name, self._hierarchy, spec)
         return self._other
 
 

@@ -21,7 +21,7 @@ from typing import Literal
 from casadi_posture.biomech.torques import Torques
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
-from casadi_posture.ik.solvers import make_solver
+from casadi_posture.ik.solvers import cached_solver
 from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
@@ -230,7 +230,7 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
         return at_posture(problem)
     hierarchy = problem.hierarchy()
     name = solver or problem.spec.solver.name
-    result = make_solver(name, hierarchy, problem.spec.solver).solve(problem.posture)
+    result = cached_solver(name, hierarchy, problem.spec.solver).solve(problem.posture)
     answer = at_posture(problem, result.q)
     levels = tuple(
         Level(k + 1, tasks, float(result.residuals[k]), unit, result.achieved[k])

@@ -1,7 +1,11 @@
-"""The two IK solvers by name, configured from a problem file's ``[solver]`` table."""
+"""The two IK solvers by name, configured from a problem file's ``[solver]`` table, and
+built once per problem structure in each worker."""
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
 from dataclasses import replace
 from typing import Protocol
 
@@ -22,6 +26,11 @@ class Solver(Protocol):
     hierarchy: TaskHierarchy
 
     def solve(self, q0: np.ndarray, inequality: Inequality | None = None) -> IKResult: ...
+
+    def rebind(self, hierarchy: TaskHierarchy) -> Solver:
+        """The same compiled solver on ``hierarchy``, a hierarchy of the same structure (other
+        target values), with no memory of earlier solves."""
+        ...
 
 
 def make_solver(name: str, hierarchy: TaskHierarchy, spec: SolverSpec | None = None) -> Solver:
@@ -47,3 +56,37 @@ def check_solver(name: str | None, file: object = None, key: str = "solver") -> 
     """Refuse a solver name other than ``SOLVER_NAMES`` (None: the problem file's)."""
     if name is not None and name not in SOLVER_NAMES:
         raise ProblemError(file, key, name, f"one of {list(SOLVER_NAMES)}")
+
+
+#: Problem structures whose solvers a worker keeps (a what-if grid varies loads, strategies
+#: or fatigue settings far more often than the body or the tasks).
+CACHED_STRUCTURES = 4
+_cache = threading.local()
+
+
+def structure_key(hierarchy: TaskHierarchy) -> str:
+    """A hierarchy's structure: the SHA-256 of its compiled residual and Jacobian function
+    (the body's geometry and masses, the tasks' kinds, not their targets, which are the
+    function's parameters) and of the joint ranges (which the solvers build in)."""
+    body = hierarchy.body
+    digest = hashlib.sha256(hierarchy.function.serialize().encode())
+    digest.update(np.concatenate([body.lower, body.upper]).tobytes())
+    return digest.hexdigest()
+
+
+def cached_solver(name: str, hierarchy: TaskHierarchy, spec: SolverSpec | None = None) -> Solver:
+    """Solver ``name`` on ``hierarchy``, built once per problem structure, solver and options
+    in this thread (a batch worker runs many cases of one structure) and rebound to this
+    hierarchy's targets, with no memory of the cases before."""
+    check_solver(name)
+    key = (name, None if spec is None else spec.model_dump_json(), structure_key(hierarchy))
+    solvers: OrderedDict = getattr(_cache, "solvers", None) or OrderedDict()
+    _cache.solvers = solvers
+    if key in solvers:
+        solvers.move_to_end(key)
+        return solvers[key].rebind(hierarchy)
+    solver = make_solver(name, hierarchy, spec)
+    solvers[key] = solver
+    while len(solvers) > CACHED_STRUCTURES:
+        solvers.popitem(last=False)
+    return solver.rebind(hierarchy)

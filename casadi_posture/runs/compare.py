@@ -8,7 +8,7 @@ import numpy as np
 
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import IKResult
-from casadi_posture.ik.solvers import make_solver
+from casadi_posture.ik.solvers import cached_solver
 from casadi_posture.problem import Problem
 
 #: Agreement: the same residual per level [task units] and, where the posture is unique,
@@ -53,8 +53,8 @@ class Comparison:
 def compare(problem: Problem) -> Comparison:
     """Solve ``problem`` with both solvers from its posture and explain any disagreement."""
     hierarchy = problem.hierarchy()
-    ns = make_solver("nullspace", hierarchy, problem.spec.solver).solve(problem.posture)
-    lx = make_solver("lexicographic", hierarchy, problem.spec.solver).solve(problem.posture)
+    ns = cached_solver("nullspace", hierarchy, problem.spec.solver).solve(problem.posture)
+    lx = cached_solver("lexicographic", hierarchy, problem.spec.solver).solve(problem.posture)
     difference = float(np.max(np.abs(np.degrees(ns.q - lx.q))))
     agree, verdict = _verdict(ns, lx, difference)
     return Comparison(
