@@ -10,8 +10,9 @@ per number of DOF n:
   numpy Baerlocher–Boulic reference written here (full n×n projectors, an SVD
   pseudo-inverse per level, the clamping loop recomputed from scratch), which calls the
   same compiled residual and Jacobian function;
-- per posture: nullspace, reference and lexicographic, from a cold start (the file's
-  upright posture) and a warm one (the solution moved 0.5° per joint), without and with
+- per posture: nullspace, reference and lexicographic, from a cold start (upright, the
+  zero posture clipped into the ranges) and a warm one (the solution moved 0.5° per
+  joint), without and with
   an active inequality aᵀq ≤ b (the right shoulder's flexion held 5° below its solution);
   the methods run interleaved, one call each in turn, and the medians are printed;
 - agreement: the largest difference of the level residuals between the two solvers;
@@ -198,7 +199,7 @@ def main() -> None:
             LexicographicSolver(hierarchy),
             NumpyReference(hierarchy),
         )
-        solution = lx.solve(problem.posture).q
+        solution = lx.solve(problem.posture).q  # from the random posture the targets are at
         shoulder = problem.body.index["shoulder_flexion_r"]
         held = Inequality(np.eye(n)[shoulder], float(solution[shoulder] - np.radians(5.0)))
         warm = np.clip(
@@ -206,7 +207,8 @@ def main() -> None:
             problem.body.lower,
             problem.body.upper,
         )
-        for start_name, start in (("cold", problem.posture), ("warm", warm)):
+        upright = np.clip(np.zeros(n), problem.body.lower, problem.body.upper)
+        for start_name, start in (("cold", upright), ("warm", warm)):
             for label, inequality in (("none", None), ("active", held)):
                 results: dict[str, IKResult] = {
                     "ns": ns.solve(start, inequality),
