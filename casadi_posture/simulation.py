@@ -1,12 +1,12 @@
 """Time simulation: hold the tasks, tire, shift to a less tiring posture, recover (docs/model.md).
 
 Per step of simulated time: solve the IK from the last posture with the current
-fatigue constraint (the other solver takes over a step the first fails or stalls
-on; a step whose IK inputs did not change, no constraint now or before, keeps the
-last certified posture); evaluate the torques; update every half-joint's fatigue
-over the step at the new posture's load (a load above 100 %MVC exhausts the group at
-once); apply the hysteresis; build the constraint for the next step. Every CasADi
-object is built once, before the loop.
+fatigue constraint (the other solver takes over a step the first fails or stalls on,
+or leaves level 1 unachieved where the other achieves it; a step whose IK inputs did
+not change, no constraint now or before, keeps the last certified posture); evaluate
+the torques; update every half-joint's fatigue over the step at the new posture's load
+(a load above 100 %MVC exhausts the group at once); apply the hysteresis; build the
+constraint for the next step. Every CasADi object is built once, before the loop.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import numpy as np
 from casadi_posture import interrupt
 from casadi_posture.adjustment.constraint import ConstraintSettings, Event, FatigueConstraint
 from casadi_posture.errors import ProblemError
-from casadi_posture.ik.hierarchy import TaskHierarchy
-from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import SOLVER_NAMES, Solver, cached_solver
 from casadi_posture.ik.tasks import Line, Task
 from casadi_posture.problem import Problem
@@ -63,7 +63,8 @@ class SimulationResult:
     """A simulated hold: its tasks, the name and unit of each level, the timeline, the
     events, why it stopped and solver statistics (wall times [s]). ``ik_failures`` counts
     steps whose posture no solver could certify; ``ik_fallbacks`` the steps the other solver
-    took over after a failure or stall; ``ik_reused`` the steps that kept the last
+    was called on after a failure or stall, or took over because the first left level 1
+    unachieved where it achieves it; ``ik_reused`` the steps that kept the last
     certified posture because no constraint applied then or now (the targets are fixed)."""
 
     problem: Problem
@@ -145,8 +146,9 @@ def simulate(problem: Problem, solver: str | None = None) -> SimulationResult:
     which exhausts it at once), when the top priority level cannot be achieved at the
     start (the task is never held), or on Ctrl-C (:mod:`casadi_posture.interrupt`): the
     result then holds the steps run so far and ``stop`` says why. A step whose solver
-    fails or stalls is solved again by the other solver from the same start; the
-    timeline records which solver gave each posture.
+    fails, stalls or leaves level 1 unachieved is solved again by the other solver from
+    the same start (:func:`_solve_step`); the timeline records which solver gave each
+    posture.
     """
     if not problem.tasks:
         raise ProblemError(problem.path, "tasks", [], "at least one task to hold")
@@ -207,21 +209,11 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         if unchanged:
             reused += 1
         else:
-            result = solvers.primary.solve(q, inequality)
-            iterations += result.iterations
-        if not result.success:
-            other = solvers.fallback().solve(q, inequality)
-            iterations += other.iterations
-            events.append(
-                Event(
-                    now,
-                    "solver_fallback",
-                    "",
-                    f"{result.solver}: {result.status}; {other.solver}: {other.status}",
-                )
-            )
-            fallbacks += 1
-            result = other if other.success else result
+            result, spent, detail = _solve_step(solvers, q, inequality)
+            iterations += spent
+            if detail:
+                events.append(Event(now, "solver_fallback", "", detail))
+                fallbacks += 1
         ik_time += time.perf_counter() - tic
         failures += not result.success
         q = result.q
@@ -332,6 +324,31 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         iterations,
         reused,
     )
+
+
+def _solve_step(
+    solvers: _Solvers, q: np.ndarray, inequality: Inequality | None
+) -> tuple[IKResult, int, str]:
+    """The step's posture from ``q`` [rad], the IK iterations spent, and why the other solver
+    gave it ('' if the first did). The other solver is tried when the first fails, stalls
+    or leaves level 1 unachieved (both are local methods: one may stop in a local minimum
+    of a level the other achieves); its answer is kept when it succeeds and the first did
+    not, or when it achieves level 1 and the first did not."""
+    result = solvers.primary.solve(q, inequality)
+    if result.success and result.achieved[0]:
+        return result, result.iterations, ""
+    other = solvers.fallback().solve(q, inequality)
+    spent = result.iterations + other.iterations
+    if not result.success:
+        detail = f"{result.solver}: {result.status}; {other.solver}: {other.status}"
+        return (other if other.success else result), spent, detail
+    if other.success and other.achieved[0]:
+        detail = (
+            f"{result.solver}: level 1 not achieved (residual {result.residuals[0]:.3g}); "
+            f"{other.solver}: achieved ({other.residuals[0]:.3g})"
+        )
+        return other, spent, detail
+    return result, spent, ""
 
 
 def _rows(record: _Recorder, key: str, count: int, width: int | None) -> np.ndarray:
