@@ -2,7 +2,7 @@
 
 Per step of simulated time: solve the IK from the last posture with the current
 fatigue constraint (the other solver takes over a step the first fails or stalls on,
-or leaves level 1 unachieved where the other achieves it; a step whose IK inputs did
+or newly leaves level 1 unachieved where the other achieves it; a step whose IK inputs did
 not change, no constraint now or before, keeps the last certified posture); evaluate
 the torques; update every half-joint's fatigue over the step at the new posture's load
 (a load above 100 %MVC exhausts the group at once); apply the hysteresis; build the
@@ -209,7 +209,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         if unchanged:
             reused += 1
         else:
-            result, spent, detail = _solve_step(solvers, q, inequality)
+            result, spent, detail = _solve_step(solvers, q, inequality, retry=held)
             iterations += spent
             if detail:
                 events.append(Event(now, "solver_fallback", "", detail))
@@ -327,15 +327,17 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
 
 
 def _solve_step(
-    solvers: _Solvers, q: np.ndarray, inequality: Inequality | None
+    solvers: _Solvers, q: np.ndarray, inequality: Inequality | None, *, retry: bool
 ) -> tuple[IKResult, int, str]:
     """The step's posture from ``q`` [rad], the IK iterations spent, and why the other solver
-    gave it ('' if the first did). The other solver is tried when the first fails, stalls
-    or leaves level 1 unachieved (both are local methods: one may stop in a local minimum
-    of a level the other achieves); its answer is kept when it succeeds and the first did
-    not, or when it achieves level 1 and the first did not."""
+    gave it ('' if the first did). The other solver is tried when the first fails or stalls,
+    and, when ``retry`` (level 1 held at the last step), when the first leaves level 1
+    unachieved: both are local methods, and one may stop in a local minimum of a level the
+    other achieves. Its answer is kept when it succeeds and the first did not, or when it
+    achieves level 1 and the first did not. While level 1 stays lost the first solver's
+    answer stands, so a task broken for good costs one solve a step."""
     result = solvers.primary.solve(q, inequality)
-    if result.success and result.achieved[0]:
+    if result.success and (result.achieved[0] or not retry):
         return result, result.iterations, ""
     other = solvers.fallback().solve(q, inequality)
     spent = result.iterations + other.iterations
