@@ -17,7 +17,7 @@ HOLD = PROBLEMS / "holding_m45.toml"
 
 def test_init_writes_a_file_that_validates_and_refuses_to_overwrite(tmp_path: Path) -> None:
     runner = CliRunner()
-    for name in ("hold", "elbow"):
+    for name in ("hold", "elbow", "tree"):
         path = tmp_path / f"{name}.toml"
         assert runner.invoke(main, ["init", name, str(path)]).exit_code == 0
         assert runner.invoke(main, ["validate", str(path)]).exit_code == 0

@@ -8,6 +8,7 @@ from importlib import resources
 TEMPLATES = {
     "hold": "a load held with the wrist on a line, the paper's holding experiment",
     "elbow": "only the elbow moves, with its torques over the range (the paper's Fig. 3)",
+    "tree": "a body of your own: a 3-DOF arm described in the file, holding 1 kg at a point",
 }
 
 
