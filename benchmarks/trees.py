@@ -364,8 +364,10 @@ def problem_data(n: int) -> dict[str, Any]:
     centre = np.where(limbs, middle, upright)  # the trunk, neck and shoulder girdle upright
     spread = np.where(limbs, 0.5, 0.05) * half
     q_target = np.clip(centre + spread * rng.uniform(-1.0, 1.0, body.n), body.lower, body.upper)
-    points = {name: _at(body.landmark(name), body.q, q_target) for name in body.landmarks}
-    com = _at(body.com(), body.q, q_target)
+    names = list(body.landmarks)
+    at_target = ca.Function("at", [body.q], [body.com(), *map(body.landmark, names)])(q_target)
+    com, *where = ([float(v) for v in np.asarray(x).ravel()] for x in at_target)
+    points = dict(zip(names, where, strict=True))
     tasks: list[dict[str, Any]] = []
     for priority, (kind, effectors) in enumerate(_levels(n), start=1):
         if kind == "com":
@@ -402,10 +404,6 @@ def problem_data(n: int) -> dict[str, Any]:
         "fatigue": {"endurance": "frey_law_avin"},
         "simulation": {"duration_s": 1200.0, "time_step_s": 1.0},
     }
-
-
-def _at(expression: ca.SX, q: ca.SX, value: np.ndarray) -> list[float]:
-    return [float(v) for v in np.asarray(ca.Function("f", [q], [expression])(value)).ravel()]
 
 
 def load(n: int) -> Problem:

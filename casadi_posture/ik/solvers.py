@@ -80,8 +80,9 @@ def cached_solver(name: str, hierarchy: TaskHierarchy, spec: SolverSpec | None =
     hierarchy's targets, with no memory of the cases before."""
     check_solver(name)
     key = (name, None if spec is None else spec.model_dump_json(), structure_key(hierarchy))
-    solvers: OrderedDict = getattr(_cache, "solvers", None) or OrderedDict()
-    _cache.solvers = solvers
+    if not hasattr(_cache, "solvers"):
+        _cache.solvers = OrderedDict()
+    solvers: OrderedDict = _cache.solvers
     if key in solvers:
         solvers.move_to_end(key)
         return solvers[key].rebind(hierarchy)
