@@ -9,7 +9,7 @@ from typing import Protocol
 import casadi as ca
 
 from casadi_posture.data import parameters
-from casadi_posture.data.parameters import Parameter
+from casadi_posture.data.parameters import Parameter, data_name
 
 
 class Strength(Protocol):
@@ -45,42 +45,90 @@ class TabulatedStrength:
         return ca.pw_lin(angle, ca.DM(self.angles), ca.DM(self.values))
 
 
+#: The strength tables of ``strength.toml`` that hold groups, in the order they are tried.
+_GROUP_TABLES = ("ratio", "harbo_2012_groups", "anderson_2007", "estimate")
+_HARBO_KEYS = ("intercept", "age", "stature", "body_mass")
+
+
 def default_strength(
     half_joint: str, *, sex: str, stature: float, body_mass: float, age: float
 ) -> tuple[ConstantStrength, Parameter]:
     """The default strength of a half-joint (docs/sources.md) and its provenance.
 
-    Elbow flexors from the Harbo et al. 2012 regression at this stature [m],
-    body mass [kg] and age [years]; other groups by the Gymnast strength ratio.
+    ``half_joint`` may carry a side suffix (``shoulder_abductors_r``): the data of the name
+    without it are used, the record keeps the full name. By the table the group is in:
+    the elbow flexors from the Harbo et al. 2012 regression at this stature [m], body mass
+    [kg] and age [years] times the group's Gymnast strength ratio; the group's own Harbo
+    regression; Anderson et al. 2007 c1·m·g·h (young adults, age not used); or our
+    estimate c·m·g·h. The record's source shows the computation.
     """
+    group = data_name(half_joint)
     table = parameters.load("strength")
-    ratio = table[f"strength.ratio.{half_joint}"]
-    c = {
-        k: parameters.value("strength", f"harbo_2012.{sex}.{k}")
-        for k in ("intercept", "age", "stature", "body_mass")
-    }
-    elbow_flexors = (
-        c["intercept"] + c["age"] * age + c["stature"] * stature + c["body_mass"] * body_mass
-    )
-    value = elbow_flexors * ratio.value
+    if f"strength.ratio.{group}" in table:
+        ratio = table[f"strength.ratio.{group}"]
+        elbow_flexors = _harbo("harbo_2012", sex, stature, body_mass, age)[0]
+        value = elbow_flexors * ratio.value
+        source = (
+            f"Harbo 2012 elbow-flexion regression ({sex}, {age:g} y, {stature:g} m, "
+            f"{body_mass:g} kg) = {elbow_flexors:.2f} N·m × ratio {ratio.value:g} ({ratio.source})"
+        )
+        evidence = "C1+E"
+    elif f"strength.harbo_2012_groups.{group}.{sex}.intercept" in table:
+        value, c, record = _harbo(f"harbo_2012_groups.{group}", sex, stature, body_mass, age)
+        source = (
+            f"Harbo 2012 regression ({sex}): {c['intercept']:g} + ({c['age']:g})·{age:g} y"
+            f" + {c['stature']:g}·{stature:g} m + {c['body_mass']:g}·{body_mass:g} kg"
+            f" = {value:.2f} N·m ({record.source})"
+        )
+        evidence = record.evidence
+    elif f"strength.anderson_2007.{group}.{sex}.c1" in table:
+        record = table[f"strength.anderson_2007.{group}.{sex}.c1"]
+        sd = table[f"strength.anderson_2007.{group}.{sex}.c1_sd"].value
+        g = table["strength.anderson_2007.gravity"].value
+        mgh = body_mass * g * stature
+        value = record.value * mgh
+        source = (
+            f"Anderson 2007 c1·m·g·h ({sex}, young adults, age not used): {record.value:g} × "
+            f"{body_mass:g} kg × {g:g} m/s² × {stature:g} m = {value:.2f} N·m; "
+            f"SD {sd:g} × m·g·h = {sd * mgh:.2f} N·m ({record.source})"
+        )
+        evidence = record.evidence
+    else:
+        record = table[f"strength.estimate.{group}.c"]
+        g = table["strength.anderson_2007.gravity"].value
+        value = record.value * body_mass * g * stature
+        source = (
+            f"c·m·g·h: {record.value:g} × {body_mass:g} kg × {g:g} m/s² × {stature:g} m"
+            f" = {value:.2f} N·m ({record.source})"
+        )
+        evidence = record.evidence
     record = Parameter(
         name=f"strength.{half_joint}",
         value=round(value, 4),
         unit="N·m",
-        source=(
-            f"Harbo 2012 elbow-flexion regression ({sex}, {age:g} y, {stature:g} m, "
-            f"{body_mass:g} kg) = {elbow_flexors:.2f} N·m × ratio {ratio.value:g} ({ratio.source})"
-        ),
+        source=source,
         status="estimate",
-        evidence="C1+E",
+        evidence=evidence,
     )
     return ConstantStrength(value), record
 
 
+def _harbo(
+    prefix: str, sex: str, stature: float, body_mass: float, age: float
+) -> tuple[float, dict[str, float], Parameter]:
+    """A Harbo et al. 2012 regression ``strength.<prefix>.<sex>``: its value [N·m], its
+    coefficients and the record of its intercept (source, evidence)."""
+    table = parameters.load("strength")
+    c = {k: table[f"strength.{prefix}.{sex}.{k}"].value for k in _HARBO_KEYS}
+    value = c["intercept"] + c["age"] * age + c["stature"] * stature + c["body_mass"] * body_mass
+    return value, c, table[f"strength.{prefix}.{sex}.intercept"]
+
+
 def known_groups() -> Sequence[str]:
-    """Half-joints with a shipped default strength."""
-    return [
-        name.removeprefix("strength.ratio.")
-        for name in parameters.load("strength")
-        if name.startswith("strength.ratio.")
-    ]
+    """Half-joints with a shipped default strength (names without a side suffix)."""
+    groups: dict[str, None] = {}
+    for name in parameters.load("strength"):
+        parts = name.split(".")  # strength.<table>.<group>...
+        if len(parts) > 2 and parts[1] in _GROUP_TABLES and parts[2] != "gravity":
+            groups.setdefault(parts[2], None)
+    return list(groups)
