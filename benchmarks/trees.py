@@ -77,6 +77,13 @@ class _Builder:
             "origin_m": [round(v, 4) for v in origin],
             "axis": axis,
             "range_deg": list(range_deg),
+            # The limit torque at this body's own range: its conventions are not the shipped
+            # ones of DOFs of the same names.
+            "passive": {
+                "model": "limit_torque",
+                "lower_deg": range_deg[0],
+                "upper_deg": range_deg[1],
+            },
             "positive": {"name": groups[0], "strength_Nm": strengths[0], "region": region},
             "negative": {"name": groups[1], "strength_Nm": strengths[1], "region": region},
         }
@@ -374,7 +381,7 @@ def problem_data(n: int) -> dict[str, Any]:
             target = [round(v, 6) for v in com]
             tasks.append(
                 {"name": "balance", "kind": "com", "priority": priority, "axes": "xy"}
-                | {"target_m": target}
+                | {"target_m": target, "include_loads": False}
             )
         for effector in effectors:
             tasks.append(

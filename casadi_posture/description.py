@@ -20,7 +20,7 @@ def description(problem: Problem) -> dict[str, Any]:
     """DOFs, segments, landmarks, loads, half-joints, tasks, settings and parameters.
 
     Positions are in the world frame at the zero posture [m], ranges in degrees. ``dofs``,
-    ``segments`` and ``landmarks`` are the body's tree as a problem file writes it
+    ``segments``, ``landmarks`` and ``feet`` are the body's tree as a problem file writes it
     (``body.tree``), whether the file gave one or named a built-in model.
     """
     body = problem.body
@@ -35,7 +35,7 @@ def description(problem: Problem) -> dict[str, Any]:
         "gravity_m_s2": body.gravity,
         **{
             table: [item.model_dump(exclude_none=True) for item in getattr(problem.tree, table)]
-            for table in ("dofs", "segments", "landmarks")
+            for table in ("dofs", "segments", "landmarks", "feet")
         },
         "loads": [
             {

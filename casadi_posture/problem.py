@@ -38,7 +38,7 @@ from casadi_posture.body.loads import Load
 from casadi_posture.body.models import MODELS
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.data import parameters
-from casadi_posture.data.parameters import Parameter
+from casadi_posture.data.parameters import Parameter, data_name
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import tasks_from_specs
@@ -46,8 +46,9 @@ from casadi_posture.spec.overrides import apply
 from casadi_posture.spec.schema import (
     ComTask,
     ExponentialPassiveSpec,
+    FeetTask,
+    GazeTask,
     LimitTorquePassiveSpec,
-    NoPassiveSpec,
     OrientationTask,
     PostureTask,
     ProblemSpec,
@@ -96,7 +97,8 @@ class Problem:
         """The problem's tasks grouped into priority levels (built once per call)."""
         if not self.spec.tasks:
             raise ProblemError(self.path, "tasks", MISSING, "at least one task to solve")
-        return TaskHierarchy(self.body, tasks_from_specs(self.spec.tasks, self.body))
+        tasks = tasks_from_specs(self.spec.tasks, self.body, self.loads, self.posture)
+        return TaskHierarchy(self.body, tasks)
 
     def torque_model(self) -> TorqueModel:
         """The compiled torque functions of this problem (build once, evaluate many)."""
@@ -277,14 +279,22 @@ def _builtin_tree(spec: ProblemSpec, path: Path) -> tuple[TreeSpec, list[Paramet
     ranges: dict[str, tuple[float, float]] = {}
     for name in recipe.dofs:
         override = body_spec.dofs.get(name)
-        lo, hi = table[f"joints.{name}.range.lower"], table[f"joints.{name}.range.upper"]
+        shipped = f"joints.{data_name(name)}.range"
+        lo, hi = (
+            replace(table[f"{shipped}.{end}"], name=f"joints.{name}.range.{end}")
+            for end in ("lower", "upper")
+        )
         if override is not None and override.range_deg is not None:
             where = f"{path} body.dofs.{name}.range_deg"
             lo = lo.overridden(override.range_deg[0], where)
             hi = hi.overridden(override.range_deg[1], where)
         ranges[name] = (lo.value, hi.value)
         records += [lo, hi]
-    tree = recipe.build(segments, ranges)
+    if body_spec.hip_height_m is not None and recipe.name != "upper_body":
+        expected = "no hip_height_m (it places the fixed pelvis of model 'upper_body' only)"
+        raise ProblemError(path, "body.hip_height_m", body_spec.hip_height_m, expected)
+    tree, derived = recipe.build(segments, ranges, body_spec)
+    records += derived
 
     groups = [side.name for d in tree.dofs for side in (d.positive, d.negative)]
     _unknown(path, "body.half_joints", body_spec.half_joints, groups)
@@ -333,31 +343,38 @@ def _override_segment(inertia: SegmentInertia, override: Any, path: Path) -> Seg
     return replace(updated, parameters=tuple(records))
 
 
-#: The passive model of a DOF whose file says nothing of it.
+#: The passive model of a DOF whose file says nothing of it and whose shipped data name no
+#: default (``joints.<dof>.passive.default``), e.g. a DOF of the file's own.
 DEFAULT_PASSIVE_MODEL = "limit_torque"
 _EXPONENTIAL_KEYS = ("k1", "k2", "q1", "k3", "k4", "q2")
 _EXPONENTIAL_UNITS = ("N·m", "1/rad", "deg", "N·m", "1/rad", "deg")
 
 
 def _passive(dof: TreeDofSpec, key: str, path: Path) -> tuple[PassiveTorque, list[Parameter]]:
-    """The passive torque of ``dof`` and its parameter records: the model the file names
-    (default ``limit_torque``), reshaped near the limits of the DOF's range if asked.
+    """The passive torque of ``dof`` and its parameter records: the model the file names,
+    else the shipped default of a DOF of that name (side suffix stripped), else
+    ``limit_torque``; reshaped near the limits of the DOF's range if asked. A shipped set
+    (``anderson_1999``, ``gymnast_fit``) is taken by name from ``joints.toml``.
 
     The limit-torque convention is anchored at the anatomical range of motion of a DOF the
     package has data for, not at the file's ``range_deg`` (extending the range lets the joint
     into the tissue's steep rise past its limit); a DOF of the file's own at its range."""
     override, name = dof.passive, dof.name
     where = f"{path} {key}.passive"
-    model_name = DEFAULT_PASSIVE_MODEL if override is None else override.model
     table = parameters.load("joints")
-    chosen = Parameter(
-        f"joints.{name}.passive.model",
-        model_name,
-        "",
-        "the default passive model" if override is None else where,
-        "estimate" if override is None else "user",
-    )
-    if isinstance(override, NoPassiveSpec):
+    shipped = f"joints.{data_name(name)}.passive."
+    default = table.get(shipped + "default")
+    if override is not None:
+        chosen = Parameter(f"joints.{name}.passive.model", override.model, "", where, "user")
+    elif default is not None:
+        chosen = replace(default, name=f"joints.{name}.passive.model", unit="")
+    else:
+        source = "the default passive model"
+        chosen = Parameter(
+            f"joints.{name}.passive.model", DEFAULT_PASSIVE_MODEL, "", source, "estimate"
+        )
+    model_name = chosen.value
+    if model_name == "none":
         return NoPassive(), [chosen]
     if model_name == "limit_torque":
         model, records = _limit_torque(dof, override, where, key, path)
@@ -373,10 +390,10 @@ def _passive(dof: TreeDofSpec, key: str, path: Path) -> tuple[PassiveTorque, lis
         ]
         model = _exponential(records[1:])
     else:
-        prefix = f"joints.{name}.passive.gymnast_fit."
+        prefix = f"{shipped}{model_name}."
         if prefix + "k1" not in table:
-            fitted = sorted({p.split(".")[1] for p in table if ".gymnast_fit." in p})
-            expected = f"a model other than gymnast_fit (fitted only for {fitted})"
+            fitted = sorted({p.split(".")[1] for p in table if f".{model_name}." in p})
+            expected = f"a model other than {model_name} (fitted only for {fitted})"
             raise ProblemError(path, f"{key}.passive.model", model_name, expected)
         records = [
             replace(table[prefix + k], name=f"joints.{name}.passive.{k}") for k in _EXPONENTIAL_KEYS
@@ -407,9 +424,12 @@ def _passive(dof: TreeDofSpec, key: str, path: Path) -> tuple[PassiveTorque, lis
 
 
 def _exponential(records: list[Parameter]) -> ExponentialPassive:
-    """The double exponential of six records k1, k2, q1 [deg], k3, k4, q2 [deg]."""
-    k1, k2, q1, k3, k4, q2 = (r.value for r in records)
-    return ExponentialPassive(k1, k2, math.radians(q1), k3, k4, math.radians(q2))
+    """The double exponential of six records k1, k2, q1, k3, k4, q2 (angles in deg, or rad
+    where a record's unit says so: the shipped anderson_1999 sets keep their source's)."""
+    k1, k2, q1, k3, k4, q2 = (
+        math.radians(r.value) if r.unit == "deg" else r.value for r in records
+    )
+    return ExponentialPassive(k1, k2, q1, k3, k4, q2)
 
 
 def _limit_torque(
@@ -419,13 +439,16 @@ def _limit_torque(
     key: str,
     path: Path,
 ) -> tuple[ExponentialPassive, list[Parameter]]:
-    """The limit-torque convention of ``dof`` with the file's values over the shipped ones."""
-    table, name = parameters.load("joints"), dof.name
-    shipped = f"joints.{name}.range.lower" in table
-    prefix = f"joints.{name if shipped else 'any_dof'}.passive.limit_torque."
+    """The limit-torque convention of ``dof`` with the file's values over the shipped ones
+    (a shipped DOF without limit-torque numbers of its own takes those of ``any_dof`` at its
+    shipped range)."""
+    table, name, base = parameters.load("joints"), dof.name, data_name(dof.name)
+    shipped = f"joints.{base}.range.lower" in table
+    own = f"joints.{base}.passive.limit_torque.limit" in table
+    prefix = f"joints.{base if own else 'any_dof'}.passive.limit_torque."
     limit, decade = table[prefix + "limit"], table[prefix + "decade"]
     if shipped:
-        lower, upper = table[f"joints.{name}.range.lower"], table[f"joints.{name}.range.upper"]
+        lower, upper = table[f"joints.{base}.range.lower"], table[f"joints.{base}.range.upper"]
     else:
         source = f"{path} {key}.range_deg"
         lower, upper = (
@@ -493,7 +516,7 @@ def _strength(
         )
         table = list(zip(curve.angle_deg, curve.strength_Nm, strict=True))
         return model, Parameter(f"strength.{name}", table, "[deg, N·m]", where, "user")
-    if name not in known_groups():
+    if data_name(name) not in known_groups():
         expected = f"a strength_Nm or strength_curve (shipped defaults only for {known_groups()})"
         raise ProblemError(path, f"{key}.strength_Nm", MISSING, expected)
     b = spec.body
@@ -516,14 +539,18 @@ def _check_tasks(body: BodyModel, spec: ProblemSpec, path: Path) -> None:
         if task.name in names:
             raise ProblemError(path, f"{key}.name", task.name, "a name no other task has")
         names.add(task.name)
-        if isinstance(task, OrientationTask):
+        if isinstance(task, OrientationTask | GazeTask):
             segments = [s.name for s in body.segments]
             if task.segment not in segments:
                 raise ProblemError(path, f"{key}.segment", task.segment, f"one of {segments}")
+            if isinstance(task, GazeTask) and task.eye not in body.landmarks:
+                raise ProblemError(path, f"{key}.eye", task.eye, f"one of {sorted(body.landmarks)}")
         elif isinstance(task, PostureTask):
             for dof in task.reference_deg:
                 _dof_index(body, dof, f"{key}.reference_deg.{dof}", path)
-        elif not isinstance(task, ComTask) and task.effector not in body.landmarks:
+        elif isinstance(task, FeetTask) and not any(f.dof for f in body.feet):
+            raise ProblemError(path, f"{key}.kind", "feet", "a body standing on two feet")
+        elif not isinstance(task, ComTask | FeetTask) and task.effector not in body.landmarks:
             raise ProblemError(
                 path, f"{key}.effector", task.effector, f"one of {sorted(body.landmarks)}"
             )

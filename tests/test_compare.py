@@ -44,7 +44,7 @@ def test_compare_writes_csv_and_skips_problems_without_tasks(tmp_path: Path) -> 
     with (tmp_path / "compare.csv").open() as handle:
         table = list(csv.DictReader(handle))
     assert len(table) == sum(load_problem(p).hierarchy().depth for p in WITH_TASKS)
-    assert {row["verdict"] for row in table} == {"agree"}
+    assert all(row["verdict"].startswith("agree") for row in table)
     assert {
         "residual_nullspace",
         "residual_lexicographic",

@@ -1,7 +1,8 @@
 """External, passive and active joint torques and half-joint loads (paper eqs 1–5; docs/model.md).
 
 All torques are about the joint axis, positive in the direction of increasing
-angle. External torque by virtual work, ``τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M``;
+angle. External torque by virtual work, ``τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M``, with the
+floor's reaction on a standing body's second foot among the forces (body/support.py);
 static equilibrium ``τa + τp + τe = 0`` gives the active torque ``τa = -(τp + τe)``.
 When ``τa_j > 0`` the positive half-joint of DOF j carries it, otherwise the
 negative one; its load is ``T_N = 100·|τa|/st`` [%MVC].
@@ -18,6 +19,7 @@ import numpy as np
 from casadi_posture.biomech.passive import PassiveTorque
 from casadi_posture.biomech.strength import Strength
 from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
+from casadi_posture.body.support import reaction_torque
 from casadi_posture.body.tree import BodyModel
 
 
@@ -79,17 +81,21 @@ class TorqueModel:
     def _external(self, p: ca.SX) -> ca.SX:
         body = self.body
         g = ca.DM([0.0, 0.0, -body.gravity])
+        forces = [(body.segment_com(s), s.mass * g) for s in body.segments]
+        moments = []
         tau = ca.SX.zeros(body.n)
-        for segment in body.segments:
-            tau += body.jacobian(body.segment_com(segment)).T @ (segment.mass * g)
+        for point, force in forces:
+            tau += body.jacobian(point).T @ force
         for k, load in enumerate(self.loads):
             mass = p[LOAD_PARAMETERS * k]
-            force = p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
+            force = mass * g + p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
             moment = p[LOAD_PARAMETERS * k + 4 : LOAD_PARAMETERS * k + 7]
-            landmark = body.landmarks[load.at]
-            tau += body.jacobian(body.landmark(load.at)).T @ (mass * g + force)
-            tau += body.angular_jacobian(landmark.dof).T @ moment
-        return tau
+            point = body.landmark(load.at)
+            tau += body.jacobian(point).T @ force
+            tau += body.angular_jacobian(body.landmarks[load.at].dof).T @ moment
+            forces.append((point, force))
+            moments.append(moment)
+        return tau + reaction_torque(body, forces, moments)
 
     def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
         """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own."""

@@ -11,7 +11,7 @@ import tomllib
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
-from typing import Any, Literal, get_args
+from typing import Any, Literal, Protocol, get_args
 
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import Parameter
@@ -21,6 +21,16 @@ Sex = Literal["male", "female"]
 
 _STEM = "anthropometry_de_leva_1996"
 _AXES = ("sagittal", "transverse", "longitudinal")
+
+
+class SegmentGeometry(Protocol):
+    """What a builder needs of a segment: ``length`` [m], ``mass`` [kg], ``com_distance`` [m]."""
+
+    length: float
+    mass: float
+
+    @property
+    def com_distance(self) -> float: ...
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from casadi_posture.body.tree import BodyModel, Dof, Landmark, Segment
+from casadi_posture.body.tree import BodyModel, Dof, Foot, Landmark, Segment
 from casadi_posture.errors import ProblemError
 from casadi_posture.spec.schema import TreeSpec
 
@@ -32,7 +32,8 @@ def check_tree(tree: TreeSpec, path: Path, key: str = "body.tree") -> None:
                     path, f"{key}.dofs[{i}].{side}.name", name, "a name no other half-joint has"
                 )
             groups.add(name)
-    for table, items in (("segments", tree.segments), ("landmarks", tree.landmarks)):
+    tables = (("segments", tree.segments), ("landmarks", tree.landmarks), ("feet", tree.feet))
+    for table, items in tables:
         names: set[str] = set()
         for i, item in enumerate(items):
             where = f"{key}.{table}[{i}]"
@@ -53,6 +54,10 @@ def check_tree(tree: TreeSpec, path: Path, key: str = "body.tree") -> None:
                     name,
                     f"a landmark: one of {sorted(landmarks)}",
                 )
+    if len(tree.feet) == 2 and sum(f.dof is None for f in tree.feet) != 1:
+        dofs_of_feet = [f.dof for f in tree.feet]
+        expected = "two feet: the tree's root foot (no dof) and one carried by a DOF"
+        raise ProblemError(path, f"{key}.feet", dofs_of_feet, expected)
     if sum(s.mass_kg for s in tree.segments) <= 0:
         raise ProblemError(path, f"{key}.segments", "total mass 0 kg", "a body with mass")
 
@@ -78,4 +83,5 @@ def body_from_tree(tree: TreeSpec, gravity: float) -> BodyModel:
         for s in tree.segments
     ]
     landmarks = [Landmark(lm.name, lm.dof, tuple(lm.position_m)) for lm in tree.landmarks]
-    return BodyModel(tree.name, dofs, segments, landmarks, gravity=gravity)
+    feet = [Foot(f.name, f.dof, tuple(tuple(p) for p in f.outline_m)) for f in tree.feet]
+    return BodyModel(tree.name, dofs, segments, landmarks, gravity=gravity, feet=feet)

@@ -10,10 +10,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Protocol
 
+from casadi_posture.body import human
+from casadi_posture.body.anthropometry import SegmentGeometry
 from casadi_posture.body.tree import Vector3
+from casadi_posture.data.parameters import Parameter
 from casadi_posture.spec.schema import (
+    BodySpec,
     TreeDofSpec,
     TreeHalfJointSpec,
     TreeLandmarkSpec,
@@ -21,19 +24,13 @@ from casadi_posture.spec.schema import (
     TreeSpec,
 )
 
-
-class SegmentGeometry(Protocol):
-    """What a builder needs of a segment: ``length`` [m], ``mass`` [kg], ``com_distance`` [m]."""
-
-    length: float
-    mass: float
-
-    @property
-    def com_distance(self) -> float: ...
-
-
-#: A model's tree from its scaled segments and its DOF ranges [deg].
-Builder = Callable[[Mapping[str, SegmentGeometry], Mapping[str, tuple[float, float]]], TreeSpec]
+#: A model's tree from its scaled segments, its DOF ranges [deg] and the file's body (sex,
+#: stature and mass, for the models whose joint centres depend on them), with the records of
+#: the numbers it derived.
+Builder = Callable[
+    [Mapping[str, SegmentGeometry], Mapping[str, tuple[float, float]], BodySpec],
+    tuple[TreeSpec, list[Parameter]],
+]
 
 
 @dataclass(frozen=True)
@@ -119,8 +116,10 @@ def _straight_arm(
 
 
 def sagittal_arm(
-    segments: Mapping[str, SegmentGeometry], ranges: Mapping[str, tuple[float, float]]
-) -> TreeSpec:
+    segments: Mapping[str, SegmentGeometry],
+    ranges: Mapping[str, tuple[float, float]],
+    body: BodySpec | None = None,
+) -> tuple[TreeSpec, list[Parameter]]:
     """The paper's sagittal arm: shoulder flexion and elbow flexion, hand rigid with the forearm.
 
     Zero posture: arm hanging straight down. Shoulder flexion raises the arm
@@ -148,12 +147,14 @@ def sagittal_arm(
         ),
     ]
     body_segments, landmarks = _straight_arm(segments, _DOWN, "shoulder_flexion", "elbow_flexion")
-    return TreeSpec(name="sagittal_arm", dofs=dofs, segments=body_segments, landmarks=landmarks)
+    return TreeSpec(name="sagittal_arm", dofs=dofs, segments=body_segments, landmarks=landmarks), []
 
 
 def frontal_elbow(
-    segments: Mapping[str, SegmentGeometry], ranges: Mapping[str, tuple[float, float]]
-) -> TreeSpec:
+    segments: Mapping[str, SegmentGeometry],
+    ranges: Mapping[str, tuple[float, float]],
+    body: BodySpec | None = None,
+) -> tuple[TreeSpec, list[Parameter]]:
     """The paper's Fig. 3 case: upper arm fixed, abducted horizontally to the right; only
     the elbow moves, in the frontal plane.
 
@@ -172,7 +173,9 @@ def frontal_elbow(
         ),
     ]
     body_segments, landmarks = _straight_arm(segments, _RIGHT, None, "elbow_flexion")
-    return TreeSpec(name="frontal_elbow", dofs=dofs, segments=body_segments, landmarks=landmarks)
+    return TreeSpec(
+        name="frontal_elbow", dofs=dofs, segments=body_segments, landmarks=landmarks
+    ), []
 
 
 MODELS: dict[str, ModelRecipe] = {
@@ -189,5 +192,21 @@ MODELS: dict[str, ModelRecipe] = {
         ("upper_arm", "forearm", "hand"),
         ("elbow_flexion",),
         frontal_elbow,
+    ),
+    "upper_body": ModelRecipe(
+        "upper_body",
+        "3-D body above the hips, pelvis fixed: lumbar 3 DOF, two arms of 7 (shoulder 3,"
+        " elbow, forearm, wrist 2)",
+        human.SEGMENTS[:-1],
+        human.dof_names("upper_body"),
+        human.upper_body,
+    ),
+    "standing": ModelRecipe(
+        "standing",
+        "3-D body standing on both feet: the upper body on two legs (hip 3, knee, ankle 2),"
+        " the right foot fixed to the floor",
+        human.SEGMENTS,
+        human.dof_names("standing"),
+        human.standing,
     ),
 }

@@ -73,6 +73,16 @@ class Landmark:
 
 
 @dataclass(frozen=True)
+class Foot:
+    """A foot on the floor: the ``outline`` of its sole [m, world, zero posture], carried by
+    ``dof`` (``None``: fixed to the world)."""
+
+    name: str
+    dof: str | None
+    outline: tuple[Vector3, ...]
+
+
+@dataclass(frozen=True)
 class HalfJoint:
     """One muscle group of a DOF: ``sign`` +1 if it drives the angle up, -1 if down."""
 
@@ -102,11 +112,13 @@ class BodyModel:
         landmarks: Sequence[Landmark],
         *,
         gravity: float,
+        feet: Sequence[Foot] = (),
     ) -> None:
         self.name = name
         self.dofs = tuple(dofs)
         self.segments = tuple(segments)
         self.landmarks = {lm.name: lm for lm in landmarks}
+        self.feet = tuple(feet)
         self.gravity = gravity
         self._check()
         self.index = {d.name: i for i, d in enumerate(self.dofs)}
@@ -146,6 +158,7 @@ class BodyModel:
             seen.add(dof.name)
         carried = [(f"body.segments.{s.name}", s.dof) for s in self.segments]
         carried += [(f"body.landmarks.{lm.name}", lm.dof) for lm in self.landmarks.values()]
+        carried += [(f"body.feet.{foot.name}", foot.dof) for foot in self.feet]
         for key, dof_name in carried:
             if dof_name is not None and dof_name not in seen:
                 raise ProblemError(None, f"{key}.dof", dof_name, f"one of {sorted(seen)}")

@@ -87,6 +87,20 @@ def regional(table: dict[str, Parameter], prefix: str, region: str, key: str) ->
     return replace(general, name=name, source=source)
 
 
+#: Name suffixes of the two sides of the body; a DOF or muscle group ``<name>_r`` or
+#: ``<name>_l`` takes the shipped data of ``<name>``.
+SIDES = ("_r", "_l")
+
+
+def data_name(name: str) -> str:
+    """The name under which the shipped data of a DOF or muscle group are filed: ``name``
+    without its side suffix (``shoulder_flexion_r`` → ``shoulder_flexion``)."""
+    for suffix in SIDES:
+        if name.endswith(suffix):
+            return name.removesuffix(suffix)
+    return name
+
+
 def value(stem: str, name: str) -> Any:
     """The value of parameter ``<stem>.<name>``."""
     return load(stem)[f"{stem}.{name}"].value

@@ -10,14 +10,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
 
+from casadi_posture.body.loads import Load
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.spec.schema import (
     ComTask,
+    FeetTask,
+    GazeTask,
     LineTask,
     OrientationTask,
     PlaneTask,
@@ -130,17 +133,68 @@ class Orientation(Task):
 
 @dataclass(frozen=True)
 class CentreOfMass(Task):
-    """Whole-body centre of mass over a target in the listed world axes [m] (balance)."""
+    """Centre of mass of the body and the ``carried`` point masses (landmark, kg) over a
+    target in the listed world axes [m] (balance)."""
 
     target: tuple[float, float, float]
     axes: str
+    carried: tuple[tuple[str, float], ...] = ()
 
     def targets(self) -> np.ndarray:
         return np.array([self.target["xyz".index(a)] for a in self.axes], dtype=float)
 
     def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
-        com = body.com()
+        mass = body.total_mass + sum(m for _, m in self.carried)
+        com = body.com() * (body.total_mass / mass)
+        for landmark, m in self.carried:
+            com += body.landmark(landmark) * (m / mass)
         return ca.vertcat(*[com["xyz".index(a)] for a in self.axes]) - p
+
+
+@dataclass(frozen=True)
+class Feet(Task):
+    """Every foot carried by a DOF kept at its zero-posture place: the offset of its sole's
+    centre [m] and the orientation error of its frame, ½·vee(Rᵀ - R) [rad-like] (zero at
+    R = I), 6 rows per foot."""
+
+    def targets(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        rows = []
+        for foot in body.feet:
+            if foot.dof is None:
+                continue
+            centre = np.mean(np.asarray(foot.outline, dtype=float), axis=0)
+            r = body.rotation(foot.dof)
+            skew = 0.5 * (r.T - r)
+            rows += [body.point(foot.dof, centre) - ca.DM(centre)]
+            rows += [ca.vertcat(skew[2, 1], skew[0, 2], skew[1, 0])]
+        return ca.vertcat(*rows)
+
+
+@dataclass(frozen=True)
+class Gaze(Task):
+    """Look at a point: e = u(q) × (target − eye(q))/|target − eye(q)|, the sine of the angle
+    between the segment's ``forward`` direction u and the line of sight, times its axis."""
+
+    segment: str
+    dof: str | None
+    eye: str
+    forward: tuple[float, float, float]
+    target: tuple[float, float, float]
+
+    step_limit = ANGULAR_STEP
+    unit = "rad"
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.target, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        u = np.asarray(self.forward, dtype=float)
+        direction = body.rotation(self.dof) @ ca.DM(u / np.linalg.norm(u))
+        sight = p - body.landmark(self.eye)
+        return ca.cross(direction, sight / ca.norm_2(sight))
 
 
 @dataclass(frozen=True)
@@ -177,8 +231,16 @@ def line_direction(spec: LineTask) -> tuple[float, float, float]:
     return (math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
 
 
-def task_from_spec(spec: TaskSpec, body: BodyModel) -> Task:
-    """The task object of a validated problem-file task."""
+def _segment_dof(name: str, body: BodyModel) -> str | None:
+    return next(s.dof for s in body.segments if s.name == name)
+
+
+def task_from_spec(
+    spec: TaskSpec, body: BodyModel, loads: Sequence[Load] = (), posture: np.ndarray | None = None
+) -> Task:
+    """The task object of a validated problem-file task; a centre-of-mass task counts the
+    masses of the held ``loads`` and without a target keeps the centre of mass where it is
+    at ``posture`` [rad]."""
     base = {"name": spec.name, "priority": spec.priority}
     if isinstance(spec, PositionTask):
         return Position(**base, effector=spec.effector, target=tuple(spec.target_m))
@@ -194,13 +256,36 @@ def task_from_spec(spec: TaskSpec, body: BodyModel) -> Task:
             **base, effector=spec.effector, point=tuple(spec.point_m), normal=tuple(spec.normal)
         )
     if isinstance(spec, OrientationTask):
-        dof = next(s.dof for s in body.segments if s.name == spec.segment)
+        dof = _segment_dof(spec.segment, body)
         rotation = rotation_rpy(*np.radians(spec.target_rpy_deg))
         return Orientation(
             **base, segment=spec.segment, dof=dof, rotation=tuple(rotation.ravel(order="F"))
         )
     if isinstance(spec, ComTask):
-        return CentreOfMass(**base, target=tuple(spec.target_m), axes=spec.axes)
+        carried = tuple((load.at, load.mass) for load in loads if load.mass > 0)
+        task = CentreOfMass(
+            **base,
+            target=(0.0, 0.0, 0.0),
+            axes=spec.axes,
+            carried=carried if spec.include_loads else (),
+        )
+        if spec.target_m is not None:
+            return replace(task, target=tuple(spec.target_m))
+        whole = replace(task, axes="xyz")
+        com = ca.Function("com", [body.q], [whole.residual(body, ca.SX.zeros(3))])
+        at = np.zeros(body.n) if posture is None else posture
+        return replace(task, target=tuple(np.asarray(com(at)).ravel()))
+    if isinstance(spec, FeetTask):
+        return Feet(**base)
+    if isinstance(spec, GazeTask):
+        return Gaze(
+            **base,
+            segment=spec.segment,
+            dof=_segment_dof(spec.segment, body),
+            eye=spec.eye,
+            forward=tuple(spec.forward),
+            target=tuple(spec.target_m),
+        )
     if isinstance(spec, PostureTask):
         return JointReference(
             **base,
@@ -210,5 +295,10 @@ def task_from_spec(spec: TaskSpec, body: BodyModel) -> Task:
     raise TypeError(f"unknown task spec {type(spec).__name__}")
 
 
-def tasks_from_specs(specs: Sequence[TaskSpec], body: BodyModel) -> list[Task]:
-    return [task_from_spec(s, body) for s in specs]
+def tasks_from_specs(
+    specs: Sequence[TaskSpec],
+    body: BodyModel,
+    loads: Sequence[Load] = (),
+    posture: np.ndarray | None = None,
+) -> list[Task]:
+    return [task_from_spec(s, body, loads, posture) for s in specs]

@@ -120,6 +120,13 @@ class NoPassiveSpec(Strict):
     model: Literal["none"]
 
 
+class Anderson1999PassiveSpec(Strict):
+    """The shipped ligament set of F.C. Anderson's thesis (1999) for a hip, knee or ankle
+    DOF, as ``joints.toml`` gives it."""
+
+    model: Literal["anderson_1999"]
+
+
 def passive_model_tag(value: object) -> str:
     """The passive model's tag; a table without ``model`` is the exponential."""
     if isinstance(value, dict):
@@ -131,7 +138,8 @@ PassiveSpec = Annotated[
     Annotated[ExponentialPassiveSpec, Tag("exponential")]
     | Annotated[LimitTorquePassiveSpec, Tag("limit_torque")]
     | Annotated[GymnastFitPassiveSpec, Tag("gymnast_fit")]
-    | Annotated[NoPassiveSpec, Tag("none")],
+    | Annotated[NoPassiveSpec, Tag("none")]
+    | Annotated[Anderson1999PassiveSpec, Tag("anderson_1999")],
     Discriminator(passive_model_tag),
 ]
 
@@ -245,14 +253,25 @@ class TreeLandmarkSpec(Strict):
     position_m: Position
 
 
+class TreeFootSpec(Strict):
+    """A foot on the floor: the outline of its sole [m, world, zero posture; z = 0 is the
+    floor], carried by ``dof`` (left out: fixed to the world, the tree's root foot)."""
+
+    name: Name
+    dof: Name | None = None
+    outline_m: list[Position] = Field(min_length=3, max_length=16)
+
+
 class TreeSpec(Strict):
     """A body described in the file: DOFs in topological order (a parent before its
-    children), segments and landmarks, all at the zero posture in the world frame."""
+    children), segments and landmarks, all at the zero posture in the world frame, and the
+    feet it stands on (none: a body fixed to the world, e.g. seated)."""
 
     name: Name = "custom"
     dofs: list[TreeDofSpec] = Field(min_length=1, max_length=MAX_TREE_DOFS)
     segments: list[TreeSegmentSpec] = Field(min_length=1, max_length=4 * MAX_TREE_DOFS)
     landmarks: list[TreeLandmarkSpec] = Field(default=[], max_length=4 * MAX_TREE_DOFS)
+    feet: list[TreeFootSpec] = Field(default=[], max_length=2)
 
 
 class BodySpec(Strict):
@@ -265,6 +284,7 @@ class BodySpec(Strict):
     stature_m: Annotated[float, _between(0.5, 2.5)] = 1.741
     mass_kg: Annotated[float, _between(10.0, 300.0)] = 73.0
     age_years: Annotated[float, Field(ge=18, le=100)] = 30.0
+    hip_height_m: Annotated[float, _between(0.2, 1.5)] | None = None
     dofs: dict[str, DofSpec] = {}
     segments: dict[str, SegmentSpec] = {}
     half_joints: dict[str, HalfJointSpec] = {}
@@ -339,11 +359,34 @@ class OrientationTask(_Task):
 
 
 class ComTask(_Task):
-    """Whole-body centre of mass over a point, in the listed world axes (balance)."""
+    """Whole-body centre of mass (with the held loads' masses unless ``include_loads`` is
+    false) over a point, in the listed world axes (balance); left out, the point is where
+    it is at the problem's posture."""
 
     kind: Literal["com"]
-    target_m: Position
+    target_m: Position | None = None
     axes: Literal["x", "y", "z", "xy", "xz", "yz", "xyz"] = "xyz"
+    include_loads: bool = True
+
+
+class FeetTask(_Task):
+    """Keep every foot the body's DOFs carry where it stands at the zero posture: the
+    position and orientation of its sole (standing on both feet)."""
+
+    kind: Literal["feet"]
+
+
+class GazeTask(_Task):
+    """Look at a point: the direction ``forward`` of a segment's frame (at the zero posture,
+    world) along the line from the landmark ``eye`` to ``target_m``."""
+
+    kind: Literal["gaze"]
+    segment: str
+    eye: str
+    forward: Direction = [1.0, 0.0, 0.0]
+    target_m: Position
+
+    _forward = field_validator("forward")(_nonzero)
 
 
 class PostureTask(_Task):
@@ -352,7 +395,14 @@ class PostureTask(_Task):
 
 
 Task = Annotated[
-    PositionTask | LineTask | PlaneTask | OrientationTask | ComTask | PostureTask,
+    PositionTask
+    | LineTask
+    | PlaneTask
+    | OrientationTask
+    | ComTask
+    | FeetTask
+    | GazeTask
+    | PostureTask,
     Field(discriminator="kind"),
 ]
 

@@ -1,0 +1,137 @@
+"""Standing on the floor: the support polygon of the feet and the floor's reaction on the
+second foot (docs/model.md, "Standing").
+
+A standing body's tree is rooted at one foot, fixed to the world; the other foot is carried
+by the leg's DOFs and kept on the floor by a task. With both feet down the floor's
+reaction is statically indeterminate; the model splits it by a stated rule:
+
+- the resultant of every applied force (gravity on the segments, held loads, pushes) and
+  moment has a centre of pressure ``c`` on the floor, where its moment about the vertical
+  axis through ``c`` has no horizontal part;
+- the vertical load ``W`` is shared by the lever rule along the line joining the centres of
+  the two soles: the carried foot takes ``s·W``, with ``s`` the position of ``c`` projected
+  on that line (0 at the root foot, 1 at the carried one);
+- both feet press at the same offset ``d`` from that line, so the two pressures add up to
+  ``W`` at ``c``; the carried foot's reaction is a vertical force ``s·W`` at the centre of
+  its sole plus ``d``. Horizontal forces and moments about the vertical go to the root
+  foot, whose reaction needs no torque of the DOFs.
+
+The carried foot's reaction enters the external torque by virtual work like a push.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from casadi_posture.body.tree import BodyModel, Foot
+
+
+def sole_points(body: BodyModel, foot: Foot) -> ca.SX:
+    """3×k world positions [m] of a foot's outline at the posture ``body.q``."""
+    return ca.horzcat(*[body.point(foot.dof, p) for p in foot.outline])
+
+
+def _sole_centre(body: BodyModel, foot: Foot) -> ca.SX:
+    """World position of a foot's sole centre (the mean of its outline)."""
+    return body.point(foot.dof, np.mean(np.asarray(foot.outline, dtype=float), axis=0))
+
+
+def carried_foot(body: BodyModel) -> Foot | None:
+    """The foot the tree's DOFs carry, if the body stands on two feet."""
+    if len(body.feet) != 2:
+        return None
+    return next(f for f in body.feet if f.dof is not None)
+
+
+def reaction_torque(
+    body: BodyModel, forces: Sequence[tuple[ca.SX, ca.SX]], moments: Sequence[ca.SX]
+) -> ca.SX:
+    """Torque [N·m] on every DOF of the floor's reaction on the carried foot, for applied
+    ``forces`` (point [m], force [N], world) and pure ``moments`` [N·m]; zero for a body not
+    standing on two feet."""
+    foot = carried_foot(body)
+    if foot is None:
+        return ca.SX.zeros(body.n)
+    root = next(f for f in body.feet if f.dof is None)
+    total = sum((f for _, f in forces), ca.SX.zeros(3))
+    moment = sum((ca.cross(x, f) for x, f in forces), ca.SX.zeros(3))
+    moment += sum(moments, ca.SX.zeros(3))
+    weight = -total[2]
+    pressure = ca.vertcat(-moment[1] / total[2], moment[0] / total[2])
+    root_centre = np.mean(np.asarray(root.outline, dtype=float), axis=0)[:2]
+    centre = _sole_centre(body, foot)
+    line = centre[:2] - root_centre
+    share = ca.dot(pressure - root_centre, line) / ca.dot(line, line)
+    offset = pressure - (root_centre + share * line)
+    force = ca.vertcat(0.0, 0.0, share * weight)
+    arm = ca.vertcat(offset, -centre[2])
+    torque = body.jacobian(centre).T @ force
+    return torque + body.angular_jacobian(foot.dof).T @ ca.cross(arm, force)
+
+
+def convex_hull(points: np.ndarray) -> np.ndarray:
+    """Convex hull of 2-D ``points`` (k×2) counter-clockwise, by Andrew's monotone chain."""
+    pts = sorted({(float(x), float(y)) for x, y in points})
+    if len(pts) < 3:
+        return np.asarray(pts)
+
+    def half(sequence: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        chain: list[tuple[float, float]] = []
+        for p in sequence:
+            while len(chain) >= 2:
+                (ax, ay), (bx, by) = chain[-2], chain[-1]
+                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 0:
+                    break
+                chain.pop()
+            chain.append(p)
+        return chain
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.asarray(lower[:-1] + upper[:-1])
+
+
+def margin(polygon: np.ndarray, point: np.ndarray) -> float:
+    """Signed distance [m] of a floor ``point`` (x, y) to the edge of a counter-clockwise
+    convex ``polygon``: positive inside, negative outside."""
+    inside, outside = np.inf, 0.0
+    for a, b in zip(polygon, np.roll(polygon, -1, axis=0), strict=True):
+        edge = b - a
+        length = float(np.hypot(*edge))
+        normal = np.array([-edge[1], edge[0]]) / length
+        along = float(np.clip(np.dot(point - a, edge) / length**2, 0.0, 1.0))
+        distance = float(np.hypot(*(point - (a + along * edge))))
+        if np.dot(point - a, normal) < 0:
+            outside = max(outside, distance)
+        inside = min(inside, distance)
+    return -outside if outside > 0 else inside
+
+
+class Support:
+    """The support polygon of a body's feet, compiled once per body."""
+
+    def __init__(self, body: BodyModel) -> None:
+        self.body = body
+        points = [sole_points(body, foot) for foot in body.feet]
+        self._points = ca.Function("soles", [body.q], [ca.horzcat(*points)]) if points else None
+
+    def polygon(self, q: np.ndarray) -> np.ndarray | None:
+        """Convex hull (k×2, counter-clockwise) [m] of the soles on the floor at posture
+        ``q`` [rad]; ``None`` for a body without feet."""
+        if self._points is None:
+            return None
+        points = np.asarray(self._points(q))
+        return convex_hull(points[:2].T)
+
+
+@lru_cache(maxsize=8)
+def _support(body: BodyModel) -> Support:
+    return Support(body)
+
+
+def support_polygon(body: BodyModel, q: np.ndarray) -> np.ndarray | None:
+    """The support polygon of ``body`` at posture ``q`` [rad] (see :class:`Support`)."""
+    return _support(body).polygon(np.asarray(q, dtype=float))
