@@ -14,31 +14,11 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
+from pinocchio_bodies import pinocchio_model
 
 from casadi_posture.cli import main
 
 pin = pytest.importorskip("pinocchio")
-
-
-def _pinocchio_model(model: dict) -> tuple[object, list[str]]:
-    pm = pin.Model()
-    pm.gravity.linear = np.array([0.0, 0.0, -model["gravity_m_s2"]])
-    joint_id, origin = {None: 0}, {None: np.zeros(3)}
-    for dof in model["dofs"]:
-        parent = dof.get("parent")
-        placement = pin.SE3(np.eye(3), np.array(dof["origin_m"]) - origin[parent])
-        joint = pin.JointModelRevoluteUnaligned(np.array(dof["axis"]))
-        joint_id[dof["name"]] = pm.addJoint(joint_id[parent], joint, placement, dof["name"])
-        origin[dof["name"]] = np.array(dof["origin_m"])
-    masses = [(s.get("dof"), s["mass_kg"], s["com_m"]) for s in model["segments"]]
-    masses += [(ld["dof"], ld["mass_kg"], ld["point_m"]) for ld in model["loads"]]
-    for dof, mass, point in masses:
-        if dof is not None:
-            lever = np.array(point) - origin[dof]
-            pm.appendBodyToJoint(
-                joint_id[dof], pin.Inertia(mass, lever, np.zeros((3, 3))), pin.SE3.Identity()
-            )
-    return pm, [d["name"] for d in model["dofs"]]
 
 
 BENCHMARKS = PROBLEMS.parent / "benchmarks" / "problems"
@@ -58,7 +38,7 @@ def test_torques_match_pinocchio_gravity(path: Path) -> None:
     path = str(path)
     described = runner.invoke(main, ["describe", path, "--json"])
     assert described.exit_code == 0, described.output
-    pm, dofs = _pinocchio_model(json.loads(described.stdout))
+    pm, dofs = pinocchio_model(json.loads(described.stdout))
     data = pm.createData()
     rng = np.random.default_rng(11)
     ranges = np.radians([d["range_deg"] for d in json.loads(described.stdout)["dofs"]])
