@@ -26,6 +26,7 @@ from casadi_posture.description import description
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
+from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.plain import plain
 from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
 from casadi_posture.output.results import (
@@ -174,6 +175,14 @@ class Simulation:
         check_out(out, force=force, key="out")
         written = write_results(self.result, out)
         return written + (plot_simulation(self.result, out) if figures else [])
+
+    def animate(self, path: str | Path, *, force: bool = False) -> Path | None:
+        """Animate the run into ``path``: .gif (always) or .mp4 (with ffmpeg on the PATH); a
+        new file, or any with ``force``. None when Ctrl-C stopped it (no file is left)."""
+        path = Path(path)
+        check_format(path.suffix.lstrip(".").lower(), key="path")
+        check_out(path, force=force, key="path")
+        return write_animation(self.result, path)
 
 
 def simulate(problem: Problem, solver: str | None = None) -> Simulation:

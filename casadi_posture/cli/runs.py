@@ -22,6 +22,7 @@ from casadi_posture.cli.common import (
     problem_from,
 )
 from casadi_posture.errors import MISSING, ProblemError
+from casadi_posture.output.animation import WRITERS, check_format
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
@@ -52,6 +53,15 @@ from casadi_posture.static import law
     default=None,
     help="Output folder [default: out/simulate/<problem>-<strategy>-<solver>].",
 )
+@click.option(
+    "--animate",
+    type=click.Choice(list(WRITERS)),
+    is_flag=False,
+    flag_value="gif",
+    default=None,
+    help="Also write animation.gif (or, --animate mp4, animation.mp4: needs ffmpeg) of the "
+    "stick figure over the run. Put it after PROBLEM or write --animate=gif.",
+)
 @SET_OPTION
 @FORCE_OPTION
 def simulate(
@@ -61,6 +71,7 @@ def simulate(
     r_min: float | None,
     duration: float | None,
     out: Path | None,
+    animate: str | None,
     sets: tuple[str, ...],
     force: bool,
 ) -> None:
@@ -80,6 +91,7 @@ def simulate(
       casadi-posture simulate problems/holding_m45.toml --strategy passive
       casadi-posture simulate problems/line_plane_hysteresis.toml --solver nullspace \\
           --duration 600 --set fatigue.recovery_law=3cc_r --out out/hysteresis
+      casadi-posture simulate problems/holding_m45.toml --animate
     """
     given = (
         ("fatigue.strategy", strategy),
@@ -87,6 +99,8 @@ def simulate(
         ("simulation.duration_s", duration),
     )
     overrides = {key: value for key, value in given if value is not None}
+    if animate is not None:
+        check_format(animate)
     with interrupt.deferred():
         resolved = problem_from(problem, overrides=overrides, sets=sets)
         name = solver or resolved.spec.solver.name
@@ -96,6 +110,12 @@ def simulate(
         api.check_out(out, force=force)
         run = api.simulate(resolved, solver)
         files = _write(run, out, command_line())
+        if animate is not None:
+            drawn = run.animate(out / f"animation.{animate}", force=True)
+            files += [drawn] if drawn else []
+            if drawn is None:
+                why = "Ctrl-C" if interrupt.requested() else "no step was run"
+                click.echo(f"animation: not written ({why})", err=True)
     raise SystemExit(_report(run, files, law(resolved)))
 
 

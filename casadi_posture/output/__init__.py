@@ -1,1 +1,6 @@
-"""What a run leaves: plain data for files, result files, terminal tables and figures."""
+"""What a run leaves: plain data for files, result files, terminal tables and figures
+(drawn with matplotlib's Agg backend into files)."""
+
+import matplotlib
+
+matplotlib.use("Agg")

@@ -5,15 +5,18 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import casadi as ca
 import matplotlib
-
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 
 from casadi_posture.biomech.curve import TorqueCurve
 from casadi_posture.ik.tasks import Line, Plane, Position
+from casadi_posture.output.figures3d import plot_postures_3d
+from casadi_posture.output.key_postures import key_postures, recoveries, title
+from casadi_posture.output.saving import save_figure
+from casadi_posture.output.skeleton import Skeleton, is_planar
 from casadi_posture.simulation import SimulationResult
 
 
@@ -44,41 +47,26 @@ def plot_torque_curve(curve: TorqueCurve, path: Path, title: str) -> Path:
     ax.set_title(title)
     ax.legend(loc="best", fontsize=8)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
-def _save(fig: plt.Figure, path: Path) -> Path:
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
-
-
-#: Recovery postures drawn in postures.png (summary.json lists them all).
-DRAWN_RECOVERIES = 5
-
-
-def _title(result: SimulationResult) -> str:
-    text = f"{result.problem.path.stem}: {result.settings.strategy} strategy, {result.solver}"
-    if result.stop == "interrupted":
-        text += " (interrupted: partial run)"
-    elif result.stop == "never_held":
-        text += " (task never held)"
-    return text
+#: Loaded groups whose legend fits inside fatigue.png's axes.
+INSIDE_LEGEND = 6
 
 
 def plot_fatigue(result: SimulationResult, path: Path) -> Path:
-    """Fatigue of every loaded half-joint over time with both thresholds (paper Fig. 9)."""
+    """Fatigue of every loaded half-joint over time with both thresholds (paper Fig. 9);
+    more than :data:`INSIDE_LEGEND` groups get 20 colours and a legend beside the axes."""
     tl, s = result.timeline, result.settings
-    fig, ax = plt.subplots(figsize=(7.0, 4.0), dpi=120)
-    for k, half in enumerate(result.problem.body.half_joints):
-        if tl.fatigue[:, k].max() > 0:
-            ax.plot(tl.time / 60, tl.fatigue[:, k], lw=1.8, label=half.name)
+    loaded = [k for k in range(tl.fatigue.shape[1]) if tl.fatigue[:, k].max() > 0]
+    many = len(loaded) > INSIDE_LEGEND
+    fig, ax = plt.subplots(figsize=(9.5 if many else 7.0, 4.0), dpi=120)
+    if many:
+        ax.set_prop_cycle(color=matplotlib.colormaps["tab20"].colors)
+    for k in loaded:
+        ax.plot(
+            tl.time / 60, tl.fatigue[:, k], lw=1.8, label=result.problem.body.half_joints[k].name
+        )
     over = [e for e in result.events if e.kind == "over_strength"]
     if over:
         ax.plot(
@@ -100,59 +88,107 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     ax.set_ylim(0, 1.05)
     ax.set_xlabel("time (min)")
     ax.set_ylabel("fatigue level")
-    ax.set_title(_title(result))
-    ax.legend(fontsize=8, loc="best")
+    ax.set_title(title(result))
+    if many:
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    else:
+        ax.legend(fontsize=8, loc="best")
     ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
-#: World axes and their labels.
-_AXES = {0: "x forward (m)", 1: "y left (m)", 2: "z up (m)"}
+#: A body region gets a panel in fatigue_regions.png when one of its groups passes this
+#: fatigue level (1 %); a group gets a line when it does.
+REGION_MIN_FATIGUE = 0.01
 
 
-class _Skeleton:
-    """The body as stick figures over time: each segment from its proximal to its distal
-    landmark when every segment names them, else the tree itself (each joint centre joined
-    to its parent's, each landmark to the joint centre that carries it)."""
+def _regions(result: SimulationResult) -> dict[str, list[int]]:
+    """The half-joints of each body region, regions in the body's order."""
+    regions: dict[str, list[int]] = {}
+    for k, half in enumerate(result.problem.body.half_joints):
+        regions.setdefault(half.region, []).append(k)
+    return regions
 
-    def __init__(self, result: SimulationResult) -> None:
-        body = result.problem.body
-        named = all(s.proximal and s.distal for s in body.segments)
-        if named:
-            ends = [(s.proximal, s.distal) for s in body.segments if s.proximal != s.distal]
-            expressions = {n: body.landmark(n) for pair in ends for n in pair}
+
+def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
+    """Fatigue over time [min], one panel (labelled with its region) per body region that
+    has a group above 1 % fatigue (at least the most tired region's), the region that
+    reached the fatigue threshold first on top, then by largest fatigue; both thresholds,
+    when a group of the region owned the constraint, and where each group first reached
+    the fatigue threshold."""
+    tl, s = result.timeline, result.settings
+    halves = result.problem.body.half_joints
+    minutes = tl.time / 60
+    peak = tl.fatigue.max(axis=0)
+    reached = tl.fatigue >= s.fatigue_threshold
+    first = np.where(reached.any(axis=0), minutes[np.argmax(reached, axis=0)], np.inf)
+    regions = _regions(result)
+    tired = {r: ks for r, ks in regions.items() if peak[ks].max() > REGION_MIN_FATIGUE}
+    if not tired:
+        top = halves[int(np.argmax(peak))].region
+        tired = {top: regions[top]}
+    order = sorted(tired, key=lambda r: (first[tired[r]].min(), -peak[tired[r]].max()))
+    height = 1.2 + 1.8 * len(order)  # [in]
+    fig, axes = plt.subplots(
+        len(order), 1, sharex=True, squeeze=False, figsize=(9.0, height), dpi=120
+    )
+    for ax, region in zip(axes[:, 0], order, strict=True):
+        groups = [k for k in tired[region] if peak[k] > REGION_MIN_FATIGUE]
+        groups = groups or [max(tired[region], key=lambda k: peak[k])]
+        for k in groups:
+            (line,) = ax.plot(minutes, tl.fatigue[:, k], lw=1.6, label=halves[k].name)
+            if np.isfinite(first[k]):
+                ax.plot(first[k], s.fatigue_threshold, "o", ms=5, color=line.get_color())
+        ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=1)
+        ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=1)
+        owned = np.isin(tl.owner, tired[region])
+        if owned.any():
+            ax.fill_between(minutes, 0, 1.05, where=owned, color="0.88", step="post", zorder=0)
+        earliest = min(tired[region], key=lambda k: (first[k], -peak[k]))
+        if np.isfinite(first[earliest]):
+            note = f"first at the threshold {halves[earliest].name}, {first[earliest]:.1f} min"
         else:
-            centres = {d.name: body.point(d.name, d.origin) for d in body.dofs}
-            ends = [(d.parent, d.name) for d in body.dofs if d.parent is not None]
-            ends += [(lm.dof, lm.name) for lm in body.landmarks.values() if lm.dof is not None]
-            expressions = centres | {n: body.landmark(n) for n in body.landmarks}
-        self.names = list(expressions)
-        self.bones = [(self.names.index(a), self.names.index(b)) for a, b in ends]
-        points = ca.horzcat(*expressions.values())
-        function = ca.Function("points", [body.q], [points]).map(max(result.timeline.time.size, 1))
-        q = result.timeline.q.T if result.timeline.time.size else np.zeros((body.n, 1))
-        stacked = np.asarray(function(q))  # 3 × (landmarks·steps)
-        self.points = stacked.reshape(3, -1, len(self.names)).transpose(1, 0, 2)
-        spread = np.ptp(self.points.transpose(1, 0, 2).reshape(3, -1), axis=1)
-        self.plane = tuple(sorted(int(i) for i in np.argsort(spread)[-2:]))
-        self.depth = next(i for i in range(3) if i not in self.plane)
-
-    def draw(self, ax: plt.Axes, step: int, **style: object) -> None:
-        """The stick figure at ``step`` in the plane of motion."""
-        i, j = self.plane
-        xyz = self.points[step]
-        for a, b in self.bones:
-            ax.plot([xyz[i, a], xyz[i, b]], [xyz[j, a], xyz[j, b]], "-", **style)
-        ax.plot(xyz[i], xyz[j], "o", ms=4, color=style.get("color"))
-
-    def frame(self, ax: plt.Axes) -> None:
-        ax.set_aspect("equal")
-        ax.set_xlabel(_AXES[self.plane[0]])
-        ax.set_ylabel(_AXES[self.plane[1]])
+            note = f"largest fatigue {peak[earliest]:.2f} ({halves[earliest].name})"
+        ax.set_title(f"{region} — {note}", fontsize=9, loc="left")
+        ax.set_label(region)
+        ax.set_ylim(0, 1.05)
+        ax.set_ylabel("fatigue level", fontsize=8)
+        ax.tick_params(labelsize=7)
         ax.grid(alpha=0.3)
+        columns = 1 + len(groups) // 7
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), ncol=columns)
+    axes[-1, 0].set_xlabel("time (min)", fontsize=8)
+    shared = [
+        Line2D([], [], color="tab:red", ls="--", lw=1, label="fatigue threshold"),
+        Line2D([], [], color="tab:green", ls="--", lw=1, label="recovery threshold"),
+        Patch(color="0.88", label="constraint owned by a group of the region"),
+        Line2D(
+            [], [], ls="", marker="o", ms=5, color="0.3", label="first at the fatigue threshold"
+        ),
+    ]
+    fig.suptitle(title(result), fontsize=10, y=1 - 0.2 / height)
+    fig.legend(
+        handles=shared,
+        loc="upper center",
+        ncol=4,
+        fontsize=7,
+        frameon=False,
+        bbox_to_anchor=(0.5, 1 - 0.42 / height),
+    )
+    quiet = [r for r in regions if r not in tired]
+    if quiet:
+        below = f"below {100 * REGION_MIN_FATIGUE:g} % fatigue throughout: {', '.join(quiet)}"
+        fig.text(0.01, 0.1 / height, below, fontsize=7)
+    fig.tight_layout(rect=(0, 0.25 / height, 1, 1 - 0.55 / height))
+    return fig
 
 
-def _draw_tasks(ax: plt.Axes, result: SimulationResult, skeleton: _Skeleton) -> None:
+def plot_fatigue_regions(result: SimulationResult, path: Path) -> Path:
+    """:func:`fatigue_regions_figure` into ``path``."""
+    return save_figure(fatigue_regions_figure(result), path, tight=False)
+
+
+def _draw_tasks(ax: plt.Axes, result: SimulationResult, skeleton: Skeleton) -> None:
     """Lines, planes (their trace in the plane of motion) and target points of the tasks."""
     i, j = skeleton.plane
     ax.autoscale(False)
@@ -177,14 +213,6 @@ def _draw_tasks(ax: plt.Axes, result: SimulationResult, skeleton: _Skeleton) -> 
             )
 
 
-def _recoveries(result: SimulationResult) -> list[int]:
-    """Steps at which the constraint was released (recovery postures)."""
-    tl = result.timeline
-    return [
-        int(np.argmax(tl.time >= e.time_s)) for e in result.events if e.kind == "constraint_off"
-    ]
-
-
 def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
     """Shade the intervals the fatigue constraint was on; mark each recovery."""
     tl = result.timeline
@@ -202,7 +230,7 @@ def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
             zorder=0,
         )
         ax.set_ylim(low, high)
-    for k, step in enumerate(_recoveries(result)):
+    for k, step in enumerate(recoveries(result)):
         ax.axvline(
             tl.time[step] / 60,
             color="tab:green",
@@ -212,32 +240,52 @@ def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
         )
 
 
+def _at_least(ax: plt.Axes, span: float) -> None:
+    """Widen the y-axis about its middle to at least ``span``."""
+    low, high = ax.get_ylim()
+    if high - low < span:
+        middle = (low + high) / 2
+        ax.set_ylim(middle - span / 2, middle + span / 2)
+
+
+#: Joint angles drawn in effector.png when no line or point task is followed: those that
+#: move most.
+DRAWN_ANGLES = 6
+
+
 def plot_effector(result: SimulationResult, path: Path) -> Path:
-    """The top task over time (paper Figs 12–14): the effector's position along a line, its
-    distance to a target point or a plane, or the joint angles of a posture task; the
-    fatigue/recovery cycles marked."""
+    """The task followed over time (paper Figs 12–14): the effector's position along the
+    first line task; else the top task's distance to its target point or plane; else the
+    joint angles that move most; the fatigue/recovery cycles marked. A distance axis spans
+    at least 1 mm, so that rounding noise does not look like motion."""
     tl = result.timeline
-    top = next(t for t in result.tasks if t.priority == min(x.priority for x in result.tasks))
+    ordered = sorted(result.tasks, key=lambda t: t.priority)
+    top, line = ordered[0], next((t for t in ordered if isinstance(t, Line)), None)
     fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
     minutes = tl.time / 60
-    if isinstance(top, Line) and tl.along_line is not None:
+    if line is not None and tl.along_line is not None:
         ax.plot(minutes, tl.along_line, color="tab:blue", lw=1.8)
-        ax.set_ylabel(f"{top.effector} along the line (m)")
+        ax.set_ylabel(f"{line.effector} along the line (m)")
+        _at_least(ax, 1e-3)
     elif isinstance(top, Position | Plane):
         ax.plot(minutes, tl.residuals[:, 0], color="tab:blue", lw=1.8)
         kind = "target" if isinstance(top, Position) else "plane"
         ax.set_ylabel(f"{top.effector} to the {kind} (m)")
+        _at_least(ax, 1e-3)
     else:
-        for i, dof in enumerate(result.problem.body.dofs):
-            ax.plot(minutes, np.degrees(tl.q[:, i]), lw=1.8, label=dof.name)
-        ax.set_ylabel("joint angle (deg)")
+        dofs = result.problem.body.dofs
+        moving = np.argsort(-np.ptp(tl.q, axis=0), kind="stable")[:DRAWN_ANGLES]
+        for i in sorted(moving):
+            ax.plot(minutes, np.degrees(tl.q[:, i]), lw=1.8, label=dofs[i].name)
+        most = f", the {DRAWN_ANGLES} that move most" if len(dofs) > DRAWN_ANGLES else ""
+        ax.set_ylabel(f"joint angle (deg){most}")
     ax.set_xlabel("time (min)")
-    ax.set_title(_title(result))
+    ax.set_title(title(result))
     ax.grid(alpha=0.3)
     _mark_cycles(ax, result)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8, loc="best")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _owner_dof(result: SimulationResult) -> int:
@@ -254,9 +302,9 @@ def plot_active_torque(result: SimulationResult, path: Path) -> Path:
     postures drawn."""
     tl, body = result.timeline, result.problem.body
     j = _owner_dof(result)
-    recoveries = _recoveries(result)
-    goal = recoveries[0] if recoveries else tl.time.size - 1
-    skeleton = _Skeleton(result)
+    steps = recoveries(result)
+    goal = steps[0] if steps else tl.time.size - 1
+    skeleton = Skeleton(body, tl.q)
     fig = plt.figure(figsize=(9.0, 4.2), dpi=120)
     ax = fig.add_axes((0.08, 0.13, 0.55, 0.75))
     deg = np.degrees(tl.q[:, j])
@@ -271,98 +319,59 @@ def plot_active_torque(result: SimulationResult, path: Path) -> Path:
     if goal + 1 < deg.size:
         ax.plot(deg[goal:], tl.active[goal:, j], color="0.7", lw=0.8, label="after the goal")
     ax.plot(deg[0], tl.active[0, j], "o", color="black", ms=7, label=f"initial ({tl.time[0]:g} s)")
-    name = f"recovery ({tl.time[goal]:g} s)" if recoveries else f"end ({tl.time[goal]:g} s)"
+    name = f"recovery ({tl.time[goal]:g} s)" if steps else f"end ({tl.time[goal]:g} s)"
     ax.plot(deg[goal], tl.active[goal, j], "s", color="tab:green", ms=7, label=name)
     ax.set_xlabel(f"{body.dofs[j].name} (deg)")
     ax.set_ylabel("active torque (N·m)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
-    ax.set_title(_title(result), fontsize=9)
+    ax.set_title(title(result), fontsize=9)
     for k, (step, color, label) in enumerate(
         ((0, "black", "initial"), (goal, "tab:green", name.split(" (")[0]))
     ):
         inset = fig.add_axes((0.70, 0.58 - 0.46 * k, 0.28, 0.31))
         skeleton.draw(inset, step, color=color, lw=2)
         skeleton.frame(inset)
-        _fit(inset, skeleton)
+        skeleton.fit(inset)
         inset.set_title(label, fontsize=8)
         inset.tick_params(labelsize=6)
         inset.xaxis.label.set_size(7)
         inset.yaxis.label.set_size(7)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
-
-
-def _fit(ax: plt.Axes, skeleton: _Skeleton) -> None:
-    """Axis limits around every posture of the run, with a margin."""
-    i, j = skeleton.plane
-    xs, ys = skeleton.points[:, i].ravel(), skeleton.points[:, j].ravel()
-    margin = 0.08 * max(np.ptp(xs), np.ptp(ys), 0.1)
-    ax.set_xlim(xs.min() - margin, xs.max() + margin)
-    ax.set_ylim(ys.min() - margin, ys.max() + margin)
-
-
-def _merge_repeats(
-    shown: list[tuple[int, str, object]], q: np.ndarray, tolerance_deg: float = 0.5
-) -> list[tuple[int, str, object]]:
-    """One stick figure per distinct posture: postures within ``tolerance_deg`` of an earlier
-    one add their label to it (a cycle that recovers where it recovered before)."""
-    merged: list[tuple[int, str, object]] = []
-    for step, label, colour in shown:
-        same = next(
-            (
-                k
-                for k, (other, _, _) in enumerate(merged)
-                if np.max(np.abs(np.degrees(q[step] - q[other]))) < tolerance_deg
-            ),
-            None,
-        )
-        if same is None:
-            merged.append((step, label, colour))
-        else:
-            first, text, first_colour = merged[same]
-            merged[same] = (first, f"{text}; {label}", first_colour)
-    return merged
+    return save_figure(fig, path, tight=False)
 
 
 def plot_postures(result: SimulationResult, path: Path) -> Path:
     """Stick figures in the plane the body moves in: the initial posture, each recovery
     posture (the first few, told apart by colour and time) and the last one; the tasks'
     lines, planes and targets drawn."""
-    tl = result.timeline
-    skeleton = _Skeleton(result)
-    recoveries = _recoveries(result)
-    shown = [(0, "initial", "black")]
-    colours = plt.cm.viridis(np.linspace(0.15, 0.85, max(len(recoveries[:DRAWN_RECOVERIES]), 1)))
-    for step, colour in zip(recoveries[:DRAWN_RECOVERIES], colours, strict=False):
-        shown.append((step, f"recovery at {tl.time[step]:g} s", colour))
-    if len(recoveries) > DRAWN_RECOVERIES:
-        step, label, colour = shown[-1]
-        shown[-1] = (step, f"{label} (+{len(recoveries) - DRAWN_RECOVERIES} more)", colour)
-    shown.append((tl.time.size - 1, f"end ({tl.time[-1]:g} s)", "tab:red"))
+    skeleton = Skeleton(result.problem.body, result.timeline.q)
     fig, ax = plt.subplots(figsize=(6.0, 5.0), dpi=120)
-    for k, (step, label, colour) in enumerate(_merge_repeats(shown, tl.q)):
+    for k, (step, label, colour) in enumerate(key_postures(result)):
         skeleton.draw(ax, step, color=colour, lw=2.6 if k == 0 else 1.6, label=label)
     skeleton.frame(ax)
-    _fit(ax, skeleton)
+    skeleton.fit(ax)
     _draw_tasks(ax, result, skeleton)
-    ax.set_title(_title(result), fontsize=9)
+    ax.set_title(title(result), fontsize=9)
     handles, labels = ax.get_legend_handles_labels()
     unique = dict(zip(labels, handles, strict=True))
     ax.legend(unique.values(), unique.keys(), fontsize=7, loc="best")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
     """All figures of a simulation into ``out`` (none for a run stopped before its first
-    step)."""
+    step): postures.png in the plane of motion for a planar body, in four views for a 3-D
+    one; fatigue_regions.png for a body of more than one region."""
     if result.timeline.time.size == 0:
         return []
-    return [
+    body = result.problem.body
+    draw_postures = plot_postures if is_planar(body) else plot_postures_3d
+    figures = [
         plot_fatigue(result, out / "fatigue.png"),
         plot_effector(result, out / "effector.png"),
         plot_active_torque(result, out / "active_torque.png"),
-        plot_postures(result, out / "postures.png"),
+        draw_postures(result, out / "postures.png"),
     ]
+    if len(_regions(result)) > 1:
+        figures.append(plot_fatigue_regions(result, out / "fatigue_regions.png"))
+    return figures

@@ -1,0 +1,173 @@
+"""The simulated hold as an animation: the stick figure over time, coloured by the state of
+the fatigue-reducing constraint, with the time [min] and a strip of the fatigue levels.
+
+GIF through matplotlib's PillowWriter (Pillow comes with matplotlib: it always works); MP4
+through FFMpegWriter when an ffmpeg program is on the PATH. The file is written under a
+temporary name beside the target and renamed when complete."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib import animation
+from matplotlib.lines import Line2D
+
+from casadi_posture import interrupt
+from casadi_posture.errors import ProblemError
+from casadi_posture.output.key_postures import title
+from casadi_posture.output.scene import VIEWS, Pose, Scene, add_3d_view
+from casadi_posture.simulation import SimulationResult
+
+#: Animation formats and the matplotlib writer of each.
+WRITERS = {"gif": "pillow", "mp4": "ffmpeg"}
+
+#: Frames per second, and the most frames drawn (a longer run is subsampled evenly):
+#: at most 12 s of animation whatever the run's length.
+FPS, MAX_FRAMES = 10, 120
+
+#: The stick figure's colour while no group owns the constraint, and while one does.
+FREE, CONSTRAINED = "black", "tab:orange"
+_COLOURS = ((FREE, "off"), (CONSTRAINED, "on"))
+
+
+def check_format(name: str, key: str = "--animate") -> str:
+    """An animation format this machine can write (gif always; mp4 needs ffmpeg)."""
+    if name not in WRITERS:
+        raise ProblemError(None, key, name, f"one of {', '.join(WRITERS)}")
+    if not animation.writers.is_available(WRITERS[name]):
+        expected = "gif (mp4 needs an ffmpeg program on the PATH, and none was found)"
+        raise ProblemError(None, key, name, expected)
+    return name
+
+
+def frame_steps(steps: int, most: int = MAX_FRAMES) -> list[int]:
+    """The steps drawn: every one of a short run, else ``most`` spread evenly, the first
+    and the last included."""
+    return sorted({int(k) for k in np.linspace(0, steps - 1, min(steps, most)).round()})
+
+
+def _busiest_view(scene: Scene, steps: list[int]) -> str:
+    """The orthographic view that shows the most motion of the body's points."""
+    points = scene.skeleton.points[steps]
+    motion = ((points - points[0]) ** 2).sum(axis=(0, 2))
+    return max(VIEWS, key=lambda name: motion[list(VIEWS[name][0])].sum())
+
+
+def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
+    """Fatigue [0–1] over time [min] of the groups that owned the constraint (or of the
+    most tired one), both thresholds, the constraint shaded; returns the time cursor."""
+    tl, s = result.timeline, result.settings
+    minutes = tl.time / 60
+    owners = list(dict.fromkeys(int(k) for k in tl.owner if k >= 0))
+    groups = owners or [int(np.argmax(tl.fatigue.max(axis=0)))]
+    halves = result.problem.body.half_joints
+    for k in groups[:4]:
+        ax.plot(minutes, tl.fatigue[:, k], lw=1.4, label=halves[k].name)
+    ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=0.8)
+    ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=0.8)
+    on = tl.owner >= 0
+    if on.any():
+        ax.fill_between(
+            minutes, 0, 1.05, where=on, color="0.88", step="post", zorder=0, label="constraint on"
+        )
+    ax.set_xlim(minutes[0], max(minutes[-1], minutes[0] + 1e-3))
+    ax.set_ylim(0, 1.05)
+    ax.set_xlabel("time (min)", fontsize=8)
+    ax.set_ylabel("fatigue", fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.legend(fontsize=7, loc="upper left", ncol=min(len(groups) + 1, 5), frameon=False)
+    return ax.axvline(minutes[0], color="black", lw=1.2)
+
+
+def _state(result: SimulationResult, step: int) -> str:
+    """The time [min] and the constraint's state at ``step`` in words."""
+    tl = result.timeline
+    text = f"t = {tl.time[step] / 60:.1f} min ({tl.time[step]:g} s)   constraint: "
+    owner = int(tl.owner[step])
+    if owner < 0:
+        return text + "off"
+    half = result.problem.body.half_joints[owner]
+    goal = (
+        f", goal {half.dof} {np.degrees(tl.goal[step]):.1f}°" if np.isfinite(tl.goal[step]) else ""
+    )
+    return text + f"on, owned by {half.name}{goal}"
+
+
+class _Frames:
+    """The animation's figure: for a 3-D body a 3-D view and the orthographic view that
+    shows the most motion, for a planar body its plane of motion; the state of the
+    constraint above, a strip of fatigue and a legend below; :meth:`draw` shows a step."""
+
+    def __init__(self, result: SimulationResult, steps: list[int]) -> None:
+        self.result = result
+        scene = Scene(result, steps)
+        self.fig = fig = plt.figure(figsize=(8.0, 5.6), dpi=100)
+        grid = fig.add_gridspec(
+            2, 2, height_ratios=[4.5, 1.1], left=0.08, right=0.97, top=0.86, bottom=0.09, hspace=0.3
+        )
+        if scene.skeleton.planar:
+            name = next(n for n, (axes, _) in VIEWS.items() if axes == scene.skeleton.plane)
+            views = [(fig.add_subplot(grid[0, :]), *VIEWS[name])]
+        else:
+            views = [
+                (add_3d_view(fig, grid[0, 0]), (0, 1, 2), ""),
+                (fig.add_subplot(grid[0, 1]), *VIEWS[_busiest_view(scene, steps)]),
+            ]
+        self.poses = []
+        for ax, axes, name in views:
+            scene.frame(ax, axes, zoom=0.95)
+            scene.draw_shapes(ax, axes, labels=False)
+            self.poses.append(Pose(ax, scene, axes, color=FREE, lw=2.2))
+            ax.set_title(name, fontsize=9)
+        bottom = grid[1, :].subgridspec(1, 2, width_ratios=[3.0, 1.0], wspace=0.05)
+        self.cursor = _fatigue_strip(fig.add_subplot(bottom[0]), result)
+        key = fig.add_subplot(bottom[1])
+        key.axis("off")
+        states = [Line2D([], [], color=c, lw=2.2, label=f"constraint {w}") for c, w in _COLOURS]
+        handles = states + scene.legend(names=False)
+        key.legend(handles=handles, loc="center left", fontsize=6.5, frameon=False, borderaxespad=0)
+        fig.suptitle(title(result), fontsize=10, y=0.985)
+        self.state = fig.text(0.5, 0.925, "", ha="center", fontsize=9)
+
+    def draw(self, step: int) -> None:
+        """Show the posture, the time and the constraint's state at ``step``."""
+        tl = self.result.timeline
+        colour = CONSTRAINED if tl.owner[step] >= 0 else FREE
+        for pose in self.poses:
+            pose.recolour(colour)
+            pose.update(step)
+        self.cursor.set_xdata([tl.time[step] / 60] * 2)
+        self.state.set_text(_state(self.result, step))
+        self.state.set_color(colour)
+
+
+def write_animation(result: SimulationResult, path: Path) -> Path | None:
+    """Animate the run into ``path`` (.gif or .mp4), at most :data:`MAX_FRAMES` frames at
+    :data:`FPS`. Returns None, leaving no file, for a run without steps or when Ctrl-C
+    (or an earlier one in the same command) stops it between frames."""
+    writer = animation.writers[WRITERS[check_format(path.suffix.lstrip(".").lower(), "path")]]
+    if result.timeline.time.size == 0 or interrupt.requested():
+        return None
+    steps = frame_steps(result.timeline.time.size)
+    frames = _Frames(result, steps)
+    temporary = path.with_name(f".{path.stem}-partial{path.suffix}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    movie = writer(fps=FPS)
+    movie.setup(frames.fig, str(temporary), dpi=frames.fig.dpi)
+    try:
+        for step in steps:
+            frames.draw(step)
+            movie.grab_frame()
+            if interrupt.requested():
+                break
+        movie.finish()  # also after Ctrl-C, to free the writer: the file is then deleted
+        if interrupt.requested():
+            return None
+        os.replace(temporary, path)
+        return path
+    finally:
+        plt.close(frames.fig)
+        temporary.unlink(missing_ok=True)

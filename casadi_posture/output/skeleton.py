@@ -1,0 +1,119 @@
+"""The body as a stick figure over a run: its points [m] at every step, the bones that join
+them, and the whole-body centre of mass [m]."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from matplotlib.axes import Axes
+
+from casadi_posture.body.tree import BodyModel
+
+#: World axes and their labels.
+AXES = {0: "x forward (m)", 1: "y left (m)", 2: "z up (m)"}
+
+#: A point of the figure: ("landmark", name) or ("centre", DOF name).
+Key = tuple[str, str]
+
+
+def is_planar(body: BodyModel) -> bool:
+    """Whether the body moves in one plane: every DOF axis parallel to the first."""
+    first = body.axis(body.dofs[0].name)
+    return all(np.linalg.norm(np.cross(first, body.axis(d.name))) < 1e-9 for d in body.dofs)
+
+
+def _bones(body: BodyModel) -> list[tuple[Key, Key]]:
+    """Each segment that names its end landmarks from one to the other; every body frame
+    (the world's included) that carries no such segment by its tree: its joint centre
+    joined to the joint centres of its children and to the landmarks it carries. The
+    world's pieces (the root joint centres, the fixed landmarks) meet at the first root's
+    centre. Bones of zero length at the zero posture, and repeats, are left out."""
+    named = [s for s in body.segments if s.proximal and s.distal and s.proximal != s.distal]
+    bones: list[tuple[Key, Key]] = [
+        (("landmark", s.proximal), ("landmark", s.distal)) for s in named
+    ]
+    covered = {s.dof for s in body.segments if s.proximal and s.distal}
+    roots = [d.name for d in body.dofs if d.parent is None]
+    carried: dict[str | None, list[Key]] = {None: [("centre", r) for r in roots[1:]]}
+    for dof in body.dofs:
+        carried.setdefault(dof.name, [])
+        if dof.parent is not None:
+            carried[dof.parent].append(("centre", dof.name))
+    for landmark in body.landmarks.values():
+        carried[landmark.dof].append(("landmark", landmark.name))
+    at_zero = {("centre", d.name): np.asarray(d.origin, dtype=float) for d in body.dofs}
+    at_zero |= {("landmark", n): np.asarray(lm.position) for n, lm in body.landmarks.items()}
+    seen = {tuple(np.round(np.concatenate([at_zero[a], at_zero[b]]), 9)) for a, b in bones}
+    for frame, members in carried.items():
+        if frame in covered or not roots:
+            continue
+        hub: Key = ("centre", frame if frame is not None else roots[0])
+        for member in members:
+            ends = tuple(np.round(np.concatenate([at_zero[hub], at_zero[member]]), 9))
+            if np.allclose(at_zero[hub], at_zero[member], atol=1e-9) or ends in seen:
+                continue
+            seen.add(ends)
+            bones.append((hub, member))
+    return bones
+
+
+class Skeleton:
+    """The stick figure of ``body`` at every row of ``q`` (steps × DOFs [rad]): ``points``
+    (steps × 3 × points [m]), ``bones`` (pairs of point indices), ``com`` (steps × 3 [m]),
+    and the positions of the landmarks in ``extra`` (loads, effectors) as points too."""
+
+    def __init__(self, body: BodyModel, q: np.ndarray, extra: tuple[str, ...] = ()) -> None:
+        bones = _bones(body)
+        keys = list(dict.fromkeys([k for bone in bones for k in bone]))
+        keys += [k for k in (("landmark", n) for n in extra) if k not in keys]
+        self.keys = keys
+        self.bones = [(keys.index(a), keys.index(b)) for a, b in bones]
+        self.joints = sorted({i for bone in self.bones for i in bone})
+        expressions = [
+            body.landmark(name)
+            if kind == "landmark"
+            else body.point(name, body.dofs[body.index[name]].origin)
+            for kind, name in keys
+        ]
+        q = np.atleast_2d(q) if len(q) else np.zeros((1, body.n))
+        function = ca.Function("skeleton", [body.q], [ca.horzcat(*expressions), body.com()])
+        points, com = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps
+        self.points = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
+        self.com = np.asarray(com).T
+        self.planar = is_planar(body)
+        spread = np.ptp(self.points.transpose(1, 0, 2).reshape(3, -1), axis=1)
+        self.plane = tuple(sorted(int(i) for i in np.argsort(spread)[-2:]))
+        self.depth = next(i for i in range(3) if i not in self.plane)
+
+    def landmark(self, name: str, step: int) -> np.ndarray:
+        """World position [m] of a landmark among the points at ``step``."""
+        return self.points[step][:, self.keys.index(("landmark", name))]
+
+    def segments(self, step: int) -> np.ndarray:
+        """The bones at ``step`` as one polyline, bones apart by NaN rows (3k × 3 [m])."""
+        xyz = self.points[step].T
+        gap = np.full(3, np.nan)
+        return np.array([row for a, b in self.bones for row in (xyz[a], xyz[b], gap)])
+
+    def draw(self, ax: Axes, step: int, **style: object) -> None:
+        """The stick figure at ``step`` in the plane of motion."""
+        i, j = self.plane
+        xyz = self.points[step]
+        for a, b in self.bones:
+            ax.plot([xyz[i, a], xyz[i, b]], [xyz[j, a], xyz[j, b]], "-", **style)
+        ax.plot(xyz[i, self.joints], xyz[j, self.joints], "o", ms=4, color=style.get("color"))
+
+    def frame(self, ax: Axes) -> None:
+        """Equal axes in the plane of motion, labelled in metres."""
+        ax.set_aspect("equal")
+        ax.set_xlabel(AXES[self.plane[0]])
+        ax.set_ylabel(AXES[self.plane[1]])
+        ax.grid(alpha=0.3)
+
+    def fit(self, ax: Axes) -> None:
+        """Axis limits around every posture of the run, with a margin."""
+        i, j = self.plane
+        xs, ys = self.points[:, i].ravel(), self.points[:, j].ravel()
+        margin = 0.08 * max(np.ptp(xs), np.ptp(ys), 0.1)
+        ax.set_xlim(xs.min() - margin, xs.max() + margin)
+        ax.set_ylim(ys.min() - margin, ys.max() + margin)
