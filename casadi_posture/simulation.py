@@ -21,6 +21,7 @@ import numpy as np
 
 from casadi_posture import interrupt
 from casadi_posture.adjustment.constraint import ConstraintSettings, Event, FatigueConstraint
+from casadi_posture.body.support import Support
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
@@ -39,7 +40,8 @@ class Timeline:
     """One row per step: time [s], q [rad], effector [m], torques [N·m] per DOF; load [%MVC],
     fatigue level and hysteresis state per half-joint; the constraint owner (-1: none), the
     goal angle [rad] and Table 1 case; the residual of each priority level; the solver that
-    gave the posture."""
+    gave the posture; for a body on its feet, the centre of mass's floor projection [m] (with
+    the held loads) and its margin inside the support polygon [m] (body/support.py)."""
 
     time: np.ndarray
     q: np.ndarray
@@ -56,6 +58,7 @@ class Timeline:
     case: list[str]
     residuals: np.ndarray
     solver: list[str]
+    balance: tuple[np.ndarray, np.ndarray] | None = None
 
 
 @dataclass(frozen=True)
@@ -304,6 +307,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         list(record.rows.get("case", [])),
         _rows(record, "residuals", count, hierarchy.depth),
         list(record.rows.get("solver", [])),
+        _balance(problem, _rows(record, "q", count, body.n)) if count else None,
     )
     return SimulationResult(
         problem,
@@ -351,6 +355,12 @@ def _solve_step(
         )
         return other, spent, detail
     return result, spent, ""
+
+
+def _balance(problem: Problem, postures: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The centre of mass over the floor and its margin in the support polygon per step."""
+    carried = [(load.at, load.mass) for load in problem.loads if load.mass > 0]
+    return Support(problem.body).balance(postures, carried)
 
 
 def _rows(record: _Recorder, key: str, count: int, width: int | None) -> np.ndarray:

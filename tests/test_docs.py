@@ -85,15 +85,18 @@ def test_timeline_columns_and_event_kinds_are_documented(tmp_path: Path) -> None
     import casadi_posture as cp
     from casadi_posture.adjustment.constraint import EventKind
 
-    problem = cp.load(ROOT / "problems" / "line_plane_hysteresis.toml")
-    run = cp.simulate(cp.load(problem.path, {"simulation.duration_s": 5.0}))
-    run.write(tmp_path / "run", figures=False)
-    header = (tmp_path / "run" / "timeline.csv").read_text().splitlines()[0].split(",")
+    header: list[str] = []
+    for name in ("line_plane_hysteresis", "standing_wall_horizontal"):  # an arm, a standing body
+        run = cp.simulate(
+            cp.load(ROOT / "problems" / f"{name}.toml", {"simulation.duration_s": 5.0})
+        )
+        run.write(tmp_path / name, figures=False)
+        header += (tmp_path / name / "timeline.csv").read_text().splitlines()[0].split(",")
     patterns = _documented_columns("### `timeline.csv`")
     assert _undocumented(header, patterns) == []
     assert _unused(header, patterns) == []
     assert set(_table("### `events.csv`")) == set(get_args(EventKind))
-    summary = (tmp_path / "run" / "summary.json").read_text()
+    summary = (tmp_path / "standing_wall_horizontal" / "summary.json").read_text()
     documented = {name for cell in _table("### `summary.json`") for name in cell.split(".")}
     import json
 

@@ -118,6 +118,29 @@ class Support:
         points = [sole_points(body, foot) for foot in body.feet]
         self._points = ca.Function("soles", [body.q], [ca.horzcat(*points)]) if points else None
 
+    def balance(
+        self, postures: np.ndarray, carried: Sequence[tuple[str, float]] = ()
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """For each posture (rows, rad): the floor projection (x, y) [m] of the centre of
+        mass of the body and the ``carried`` point masses (landmark, kg), and its margin
+        [m] inside the support polygon (negative: outside); ``None`` without feet."""
+        if self._points is None:
+            return None
+        body = self.body
+        mass = body.total_mass + sum(m for _, m in carried)
+        com = body.com() * (body.total_mass / mass)
+        for landmark, m in carried:
+            com += body.landmark(landmark) * (m / mass)
+        f = ca.Function("balance", [body.q], [com[:2], self._points(body.q)])
+        many = f.map(len(postures))
+        ground, soles = (np.asarray(v) for v in many(np.asarray(postures).T))
+        k = soles.shape[1] // len(postures)
+        margins = [
+            margin(convex_hull(soles[:2, i * k : (i + 1) * k].T), ground[:, i])
+            for i in range(len(postures))
+        ]
+        return ground.T, np.asarray(margins)
+
     def polygon(self, q: np.ndarray) -> np.ndarray | None:
         """Convex hull (k×2, counter-clockwise) [m] of the soles on the floor at posture
         ``q`` [rad]; ``None`` for a body without feet."""

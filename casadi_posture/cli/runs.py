@@ -248,15 +248,20 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
     lines = [
         "limiting group at start (shortest endurance): "
         + (
-            f"{limiting['half_joint']} ({limiting['endurance_min']:.2f} min)"
+            f"{limiting['half_joint']} ({limiting['region']}, {limiting['endurance_min']:.2f} min)"
             if limiting
             else "none (no group tires)"
         ),
         "first at the fatigue threshold: "
-        + (f"{first['half_joint']} at {first['time_s']:g} s" if first else "none"),
+        + (
+            f"{first['half_joint']} ({first['region']}) at {first['time_s']:g} s"
+            if first
+            else "none"
+        ),
         "exhausted: "
         + (
-            f"{exhausted['half_joint']} at {exhausted['time_s']:g} s ({exhausted['cause']})"
+            f"{exhausted['half_joint']} ({exhausted['region']}) at {exhausted['time_s']:g} s"
+            f" ({exhausted['cause']})"
             if exhausted
             else "none"
         ),
@@ -445,7 +450,7 @@ def whatif(
         quiet=quiet,
     )
     keys = [k for k, _ in parsed]
-    headers = [*keys, "reached", "limiting group at start", "endurance at start (min)"]
+    headers = [*keys, "reached", "limiting group at start", "region", "endurance at start (min)"]
     if not static:
         headers += ["first at threshold (s)", "exhausted group", "cycles", "task held (s)"]
     headers.append("flags")
@@ -467,6 +472,7 @@ def whatif(
         line += [
             _yes_no(row.get("reached")),
             row["limiting_group_at_start"] or "none",
+            row["limiting_region_at_start"] or "-",
             _unlimited(row["limiting_endurance_at_start_min"]),
         ]
         if not static:

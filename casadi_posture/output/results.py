@@ -52,6 +52,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
             {
                 "half_joint": half.name,
                 "dof": half.dof,
+                "region": half.region,
                 "initial_load_pct_mvc": load0,
                 "initial_endurance_min": None if seconds is None else seconds / 60.0,
                 "initial_verdict": verdict,
@@ -69,6 +70,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         key=lambda g: (g["initial_endurance_min"], -g["initial_load_pct_mvc"]),
         default=None,
     )
+    regions = {h.name: h.region for h in body.half_joints}
     crossings = [e for e in result.events if e.kind == "fatigue_threshold"]
     exhausted = next((e for e in result.events if e.kind == "exhausted"), None)
     return {
@@ -87,16 +89,22 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         if limiting is None
         else {
             "half_joint": limiting["half_joint"],
+            "region": limiting["region"],
             "load_pct_mvc": limiting["initial_load_pct_mvc"],
             "endurance_min": limiting["initial_endurance_min"],
         },
         "first_to_fatigue": None
         if not crossings
-        else {"half_joint": crossings[0].half_joint, "time_s": crossings[0].time_s},
+        else {
+            "half_joint": crossings[0].half_joint,
+            "region": regions[crossings[0].half_joint],
+            "time_s": crossings[0].time_s,
+        },
         "exhausted_group": None
         if exhausted is None
         else {
             "half_joint": exhausted.half_joint,
+            "region": regions[exhausted.half_joint],
             "time_s": exhausted.time_s,
             "cause": exhausted.detail.split(":")[0],
         },
@@ -107,6 +115,9 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "over_strength_events": sum(e.kind == "over_strength" for e in result.events),
         "constraint_blocked_events": sum(e.kind == "constraint_blocked" for e in result.events),
         "keep_levels": result.settings.keep_levels,
+        "balance_margin_min_m": None
+        if tl.balance is None or not tl.balance[1].size
+        else float(tl.balance[1].min()),
         "flags": flags(result),
         "solver_statistics": {
             "steps": int(tl.time.size),
@@ -170,6 +181,12 @@ def flags(result: SimulationResult) -> list[str]:
         out.append(f"over strength at the start ({names}): the posture cannot be held at all")
     if result.ik_failures:
         out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
+    if tl.balance is not None and tl.balance[1].size and tl.balance[1].min() < 0:
+        lost = tl.time[np.argmax(tl.balance[1] < 0)]
+        out.append(
+            f"balance lost at {lost:g} s: the centre of mass leaves the support polygon "
+            f"by {-tl.balance[1].min():.3g} m (see balance_margin_m in timeline.csv)"
+        )
     return out
 
 
@@ -314,6 +331,11 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     for k, unit in enumerate(result.level_units):
         columns[f"residual_level{k + 1}_{unit.replace(', ', '_')}"] = tl.residuals[:, k].tolist()
     columns["ik_solver"] = list(tl.solver)
+    if tl.balance is not None:
+        ground, margins = tl.balance
+        columns["com_x_m"] = ground[:, 0].tolist()
+        columns["com_y_m"] = ground[:, 1].tolist()
+        columns["balance_margin_m"] = margins.tolist()
     return columns
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from casadi_posture.body.tree import BodyModel
 from casadi_posture.output.results import summary
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer
@@ -20,7 +21,8 @@ def static_row(answer: StaticAnswer) -> dict[str, Any]:
         top = answer.levels[0]
         row |= _reach(top.achieved, top.residual, top.unit)
     start = {g.name: (g.load_pct_mvc, g.endurance_s) for g in answer.groups}
-    return row | _endurance(start) | {"flags": "; ".join(answer.flags)}
+    regions = _regions(answer.problem.body)
+    return row | _endurance(start, regions) | {"flags": "; ".join(answer.flags)}
 
 
 def simulation_row(result: SimulationResult) -> dict[str, Any]:
@@ -39,13 +41,15 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     }
     row: dict[str, Any] = (
         _reach(task["held_at_start"], task["level1_residual_at_start"], task["level1_unit"])
-        | _endurance(start)
+        | _endurance(start, _regions(result.problem.body))
         | {
             "simulated_s": report["simulated_s"],
             "stop": report["stop"],
             "first_to_fatigue": first["half_joint"] if first else "",
+            "first_to_fatigue_region": first["region"] if first else "",
             "first_fatigue_s": first["time_s"] if first else None,
             "exhausted_group": exhausted["half_joint"] if exhausted else "",
+            "exhausted_region": exhausted["region"] if exhausted else "",
             "exhausted_s": exhausted["time_s"] if exhausted else None,
             "fatigue_recovery_cycles": report["fatigue_recovery_cycles"],
             "task_held_s": task["held_s"],
@@ -53,6 +57,7 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
             "task_lost_reason": task["lost"]["reason"] if task["lost"] else "",
             "ik_failures": report["solver_statistics"]["ik_failures"],
             "ik_fallbacks": report["solver_statistics"]["ik_fallbacks"],
+            "balance_margin_min_m": report["balance_margin_min_m"],
             "flags": "; ".join(report["flags"]),
         }
     )
@@ -73,9 +78,16 @@ def _reach(reached: bool, residual: float | None, unit: str) -> dict[str, Any]:
     return {"reached": reached, f"residual_level1_{unit.replace(', ', '_')}": residual}
 
 
-def _endurance(groups: dict[str, tuple[float | None, float]]) -> dict[str, Any]:
+def _regions(body: BodyModel) -> dict[str, str]:
+    return {h.name: h.region for h in body.half_joints}
+
+
+def _endurance(
+    groups: dict[str, tuple[float | None, float]], regions: dict[str, str]
+) -> dict[str, Any]:
     """Each half-joint's start load [%MVC] and endurance [min], the groups over strength, and
-    the limiting group at the start: the shortest endurance (empty when no group tires)."""
+    the limiting group at the start and its body region: the shortest endurance (empty when
+    no group tires)."""
     row: dict[str, Any] = {}
     for name, (load, seconds) in groups.items():
         row[f"initial_load_{name}_pct_mvc"] = load
@@ -86,5 +98,6 @@ def _endurance(groups: dict[str, tuple[float | None, float]]) -> dict[str, Any]:
     return row | {
         "over_strength_at_start": "+".join(over),
         "limiting_group_at_start": limiting or "",
+        "limiting_region_at_start": "" if limiting is None else regions[limiting],
         "limiting_endurance_at_start_min": None if limiting is None else groups[limiting][1] / 60,
     }

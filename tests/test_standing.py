@@ -1,0 +1,99 @@
+"""The standing and seated 3-D scenarios: balance holds, the trunk joins a far reach, the
+gaze and feet tasks mean what they say."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+from conftest import PROBLEMS
+
+from casadi_posture.ik.solvers import cached_solver
+from casadi_posture.problem import load_problem, problem_from_data
+from casadi_posture.simulation import simulate
+
+STANDING = sorted(p for p in PROBLEMS.glob("*.toml") if 'model = "standing"' in p.read_text())
+
+
+def test_every_standing_problem_is_shipped() -> None:
+    assert {p.stem for p in STANDING} >= {
+        "standing_wall_horizontal",
+        "standing_wall_m25",
+        "standing_wall_m45",
+        "standing_shelf_box",
+        "standing_overhead_drill",
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", STANDING, ids=lambda p: p.stem)
+@pytest.mark.parametrize("solver", ["nullspace", "lexicographic"])
+def test_balance_holds_throughout_every_standing_simulation(path: Path, solver: str) -> None:
+    problem = load_problem(path, {"simulation.duration_s": 400.0})
+    result = simulate(problem, solver)
+    ground, margins = result.timeline.balance
+    assert margins.size == result.timeline.time.size > 30
+    assert margins.min() > 0.02  # the centre of mass stays > 2 cm inside the polygon
+    assert np.abs(ground - ground[0]).max() < 1e-4  # balance: an equality at its start point
+    assert result.timeline.residuals[:, 0].max() < 1e-4  # feet and balance held
+
+
+def test_a_reach_beyond_the_arms_moves_the_trunk_and_keeps_balance() -> None:
+    problem = load_problem(PROBLEMS / "standing_shelf_box.toml")
+    body = problem.body
+    at = ca.Function("at", [body.q], [body.landmark("shoulder_r"), body.landmark("grip_r")])
+    shoulder, grip = (np.asarray(v).ravel() for v in at(np.zeros(body.n)))
+    arm = np.linalg.norm(grip - shoulder)
+    target = np.array([0.62, -0.15, 1.40])
+    assert np.linalg.norm(target - shoulder) > arm  # out of reach of the arm alone
+    for name in ("nullspace", "lexicographic"):
+        answer = cached_solver(name, problem.hierarchy()).solve(problem.posture)
+        assert answer.residuals[0] < 1e-6 and answer.residuals[1] < 1e-6, name
+        q = dict(zip(body.dof_names, np.degrees(answer.q), strict=True))
+        assert q["lumbar_flexion"] > 5.0 or q["hip_flexion_r"] > 5.0, name
+        sim = simulate(
+            load_problem(PROBLEMS / "standing_shelf_box.toml", {"simulation.duration_s": 5.0}), name
+        )
+        assert sim.timeline.balance[1].min() > 0.0
+
+
+def _upright(tasks: list[dict]) -> dict:
+    return {
+        "body": {"model": "standing"},
+        "posture_deg": {"elbow_flexion_r": 10.0, "elbow_flexion_l": 10.0},
+        "tasks": tasks,
+    }
+
+
+def test_gaze_residual_is_the_sine_of_the_angle_off_the_line_of_sight() -> None:
+    eyes_forward = 0.35 * 0.2429  # the eyes' offset: data/joint_centres.toml estimates
+    for angle in (0.0, 20.0, -35.0):
+        a = math.radians(angle)
+        problem = problem_from_data(
+            _upright(
+                [
+                    {
+                        "name": "look",
+                        "kind": "gaze",
+                        "segment": "head_neck",
+                        "eye": "eyes",
+                        "priority": 1,
+                        "target_m": [eyes_forward + math.cos(a), math.sin(a), 1.6376],
+                    }
+                ]
+            )
+        )
+        residual = problem.hierarchy().residual_norms(problem.posture)[0]
+        assert residual == pytest.approx(abs(math.sin(a)), abs=1e-3)
+
+
+def test_the_feet_task_is_zero_at_the_zero_posture_and_sees_a_lifted_foot() -> None:
+    problem = problem_from_data(_upright([{"name": "feet", "kind": "feet", "priority": 1}]))
+    hierarchy = problem.hierarchy()
+    q = np.zeros(problem.body.n)
+    assert hierarchy.residual_norms(q)[0] < 1e-12
+    q[problem.body.index["knee_flexion_l"]] = 0.5
+    assert hierarchy.residual_norms(q)[0] > 0.05
