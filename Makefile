@@ -33,6 +33,8 @@ demo: $(VENV)/.demo
 		--out $(DEMO_OUT)/holding_m45-passive --force
 	$(BIN)/casadi-posture simulate problems/line_plane_hysteresis.toml \
 		--out $(DEMO_OUT)/line_plane_hysteresis --force
+	$(BIN)/casadi-posture simulate problems/standing_wall_horizontal.toml --animate=gif \
+		--out $(DEMO_OUT)/standing_wall_horizontal --force
 	$(BIN)/casadi-posture compare problems/*.toml --out $(DEMO_OUT)/compare --force
 	$(BIN)/casadi-posture curve problems/frontal_elbow.toml --dof elbow_flexion \
 		--out $(DEMO_OUT)/frontal_elbow_fig3.png --force

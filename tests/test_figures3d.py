@@ -63,7 +63,13 @@ def test_the_3d_figure_draws_the_support_polygon_and_com_it_is_given(
     monkeypatch.setattr(scene, "support_polygon", lambda body, q: square)
     result = humanoid.result
     body = result.problem.body
-    com = np.asarray(ca.Function("com", [body.q], [body.com()])(result.timeline.q[0])).ravel()
+    # The centre of mass the balance counts: the body's and the held loads'.
+    loads = [(load.at, load.mass) for load in result.problem.loads]
+    mass = body.total_mass + sum(m for _, m in loads)
+    weighted = body.com() * body.total_mass + sum(body.landmark(at) * m for at, m in loads)
+    com = np.asarray(ca.Function("com", [body.q], [weighted / mass])(result.timeline.q[0])).ravel()
+    balance = result.timeline.balance
+    assert balance is None or np.allclose(com[:2], balance[0][0])
     fig = postures_3d_figure(result)
     views = {ax.get_label(): ax for ax in fig.axes}
     assert {"sagittal", "frontal", "top", "3-D"} <= set(views)

@@ -160,7 +160,7 @@ def test_simulate_command_writes_its_files(tmp_path: Path) -> None:
         ],
     )
     assert result.exit_code == 0, result.output
-    assert "first at the fatigue threshold: shoulder_flexors at 172 s" in result.stdout
+    assert "first at the fatigue threshold: shoulder_flexors (shoulder) at 172 s" in result.stdout
     names = {
         "timeline.csv",
         "events.csv",

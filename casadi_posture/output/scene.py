@@ -137,7 +137,8 @@ class Scene:
         forces = [(load.at, load.mass * down + load.force, load) for load in problem.loads]
         self.loads = [(at, force, load) for at, force, load in forces if force.any()]
         extra = tuple(dict.fromkeys(at for at, _, _ in self.loads))
-        self.skeleton = Skeleton(problem.body, result.timeline.q, extra)
+        carried = tuple((load.at, load.mass) for load in problem.loads if load.mass > 0)
+        self.skeleton = Skeleton(problem.body, result.timeline.q, extra, carried)
         self.shapes = task_shapes(result.tasks)
         self.polygons = {s: support_polygon(problem.body, result.timeline.q[s]) for s in steps}
         points = np.concatenate([self.skeleton.points[s].T for s in steps])

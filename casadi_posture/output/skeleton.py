@@ -59,10 +59,17 @@ def _bones(body: BodyModel) -> list[tuple[Key, Key]]:
 
 class Skeleton:
     """The stick figure of ``body`` at every row of ``q`` (steps × DOFs [rad]): ``points``
-    (steps × 3 × points [m]), ``bones`` (pairs of point indices), ``com`` (steps × 3 [m]),
+    (steps × 3 × points [m]), ``bones`` (pairs of point indices), ``com`` (steps × 3 [m]:
+    of the body and the ``carried`` point masses (landmark, kg), as the balance counts it),
     and the positions of the landmarks in ``extra`` (loads, effectors) as points too."""
 
-    def __init__(self, body: BodyModel, q: np.ndarray, extra: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self,
+        body: BodyModel,
+        q: np.ndarray,
+        extra: tuple[str, ...] = (),
+        carried: tuple[tuple[str, float], ...] = (),
+    ) -> None:
         bones = _bones(body)
         keys = list(dict.fromkeys([k for bone in bones for k in bone]))
         keys += [k for k in (("landmark", n) for n in extra) if k not in keys]
@@ -76,7 +83,11 @@ class Skeleton:
             for kind, name in keys
         ]
         q = np.atleast_2d(q) if len(q) else np.zeros((1, body.n))
-        function = ca.Function("skeleton", [body.q], [ca.horzcat(*expressions), body.com()])
+        mass = body.total_mass + sum(m for _, m in carried)
+        com = body.com() * (body.total_mass / mass)
+        for landmark, m in carried:
+            com += body.landmark(landmark) * (m / mass)
+        function = ca.Function("skeleton", [body.q], [ca.horzcat(*expressions), com])
         points, com = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps
         self.points = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
         self.com = np.asarray(com).T
