@@ -412,27 +412,16 @@ def _arm(
     t.landmark(f"wrist_{side}", forearm_dof, wrist)
     t.landmark(f"grip_{side}", hand_dof, _below(wrist, hand.com_distance))
     t.landmark(f"knuckles_{side}", hand_dof, knuckles)
-    t.segment(
-        f"upper_arm_{side}",
-        upper_arm_dof,
-        ua.mass,
-        _below(shoulder, ua.com_distance),
-        (f"shoulder_{side}", f"elbow_{side}"),
+    parts = (
+        ("upper_arm", upper_arm_dof, ua, shoulder, "shoulder", "elbow"),
+        ("forearm", forearm_dof, fa, elbow, "elbow", "wrist"),
+        ("hand", hand_dof, hand, wrist, "wrist", "knuckles"),
     )
-    t.segment(
-        f"forearm_{side}",
-        forearm_dof,
-        fa.mass,
-        _below(elbow, fa.com_distance),
-        (f"elbow_{side}", f"wrist_{side}"),
-    )
-    t.segment(
-        f"hand_{side}",
-        hand_dof,
-        hand.mass,
-        _below(wrist, hand.com_distance),
-        (f"wrist_{side}", f"knuckles_{side}"),
-    )
+    for name, dof, geometry, top, proximal, distal in parts:
+        com = _below(top, geometry.com_distance)
+        t.segment(
+            f"{name}_{side}", dof, geometry.mass, com, (f"{proximal}_{side}", f"{distal}_{side}")
+        )
 
 
 def _leg_points(sk: Skeleton, side: str) -> dict[str, Point]:

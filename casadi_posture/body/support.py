@@ -127,10 +127,7 @@ class Support:
         if self._points is None:
             return None
         body = self.body
-        mass = body.total_mass + sum(m for _, m in carried)
-        com = body.com() * (body.total_mass / mass)
-        for landmark, m in carried:
-            com += body.landmark(landmark) * (m / mass)
+        com = body.com(carried)
         f = ca.Function("balance", [body.q], [com[:2], self._points(body.q)])
         many = f.map(len(postures))
         ground, soles = (np.asarray(v) for v in many(np.asarray(postures).T))

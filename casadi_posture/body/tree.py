@@ -232,10 +232,11 @@ class BodyModel:
         """World position [m] of a segment's centre of mass."""
         return self.point(segment.dof, segment.com)
 
-    def com(self) -> ca.SX:
-        """Whole-body centre of mass [m]."""
+    def com(self, carried: Sequence[tuple[str, float]] = ()) -> ca.SX:
+        """Centre of mass [m] of the body and the ``carried`` point masses (landmark, kg)."""
         weighted = sum((s.mass * self.segment_com(s) for s in self.segments), ca.SX.zeros(3))
-        return weighted / self.total_mass
+        weighted += sum((m * self.landmark(at) for at, m in carried), ca.SX.zeros(3))
+        return weighted / (self.total_mass + sum(m for _, m in carried))
 
     def angular_jacobian(self, dof: str | None) -> ca.SX:
         """3×n map from joint rates to the angular velocity of the frame of ``dof``."""

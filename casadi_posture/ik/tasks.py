@@ -144,10 +144,7 @@ class CentreOfMass(Task):
         return np.array([self.target["xyz".index(a)] for a in self.axes], dtype=float)
 
     def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
-        mass = body.total_mass + sum(m for _, m in self.carried)
-        com = body.com() * (body.total_mass / mass)
-        for landmark, m in self.carried:
-            com += body.landmark(landmark) * (m / mass)
+        com = body.com(self.carried)
         return ca.vertcat(*[com["xyz".index(a)] for a in self.axes]) - p
 
 

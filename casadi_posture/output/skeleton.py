@@ -83,11 +83,7 @@ class Skeleton:
             for kind, name in keys
         ]
         q = np.atleast_2d(q) if len(q) else np.zeros((1, body.n))
-        mass = body.total_mass + sum(m for _, m in carried)
-        com = body.com() * (body.total_mass / mass)
-        for landmark, m in carried:
-            com += body.landmark(landmark) * (m / mass)
-        function = ca.Function("skeleton", [body.q], [ca.horzcat(*expressions), com])
+        function = ca.Function("skeleton", [body.q], [ca.horzcat(*expressions), body.com(carried)])
         points, com = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps
         self.points = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
         self.com = np.asarray(com).T
