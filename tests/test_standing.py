@@ -97,3 +97,21 @@ def test_the_feet_task_is_zero_at_the_zero_posture_and_sees_a_lifted_foot() -> N
     assert hierarchy.residual_norms(q)[0] < 1e-12
     q[problem.body.index["knee_flexion_l"]] = 0.5
     assert hierarchy.residual_norms(q)[0] > 0.05
+
+
+def test_solve_notes_the_dofs_the_tasks_leave_free(tmp_path: Path) -> None:
+    from click.testing import CliRunner
+
+    from casadi_posture.cli import main
+
+    text = (PROBLEMS / "standing_shelf_box.toml").read_text()
+    cut = text.index('[[tasks]]\nname = "upright"')
+    loose = tmp_path / "loose.toml"
+    loose.write_text(text[:cut] + text[text.index("[fatigue]") :])
+    notes = {
+        path.stem: CliRunner().invoke(main, ["solve", str(path)]).output
+        for path in (PROBLEMS / "standing_shelf_box.toml", loose)
+    }
+    # feet 6 + balance 2 + two hands 6 rows determine 14 of 29 DOFs
+    assert "note: the tasks leave 15 of 29 DOFs free" in notes["loose"]
+    assert "note:" not in notes["standing_shelf_box"]

@@ -175,6 +175,18 @@ def echo_torques(answer: StaticAnswer) -> None:
     click.echo(f"\nendurance rule: {answer.rule}")
 
 
+def echo_free_dofs(problem: Problem) -> None:
+    """A note when the tasks leave DOFs undetermined at the problem's posture."""
+    if not problem.spec.tasks:
+        return
+    free = problem.hierarchy().free_dofs(problem.posture)
+    if free:
+        click.echo(
+            f"note: the tasks leave {free} of {problem.body.n} DOFs free at the start; each "
+            "solver settles them its own way unless a posture task at the lowest priority does"
+        )
+
+
 def command_line() -> list[str]:
     """The command line that started this command, for manifests."""
     return list(click.get_current_context().meta.get("command_line", []))

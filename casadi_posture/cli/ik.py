@@ -11,6 +11,7 @@ from casadi_posture.cli.common import (
     FORCE_OPTION,
     SET_OPTION,
     SOLVER_OPTION,
+    echo_free_dofs,
     echo_torques,
     emit_json,
     main,
@@ -88,7 +89,9 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
             )
         )
         limits = ", ".join(result.at_limits) or "none"
-        click.echo(f"\njoints at a limit: {limits}\n")
+        click.echo(f"\njoints at a limit: {limits}")
+        echo_free_dofs(answer.problem)
+        click.echo()
         echo_torques(answer)
         for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")

@@ -17,6 +17,7 @@ from casadi_posture.cli.common import (
     SOLVER_OPTION,
     batch_options,
     command_line,
+    echo_free_dofs,
     main,
     parse_sets,
     problem_from,
@@ -193,6 +194,7 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
         f"{stats['ik_fallbacks']} steps by the other solver, {stats['ik_failures']} IK failures, "
         f"{stats['ik_reused']} unchanged steps kept their posture"
     )
+    echo_free_dofs(result.problem)
     click.echo(f"recovery law: {recovery_law}")
     click.echo(f"endurance rule: {report['endurance_rule']}\n")
     click.echo(

@@ -83,6 +83,13 @@ class TaskHierarchy:
         """Unit of each level's residual: 'm', 'rad' or 'm, rad' for a mixed level."""
         return [", ".join(sorted({t.unit for t in level}, reverse=True)) for level in self.levels]
 
+    def free_dofs(self, q: np.ndarray) -> int:
+        """DOFs no level determines at ``q`` [rad]: n − rank of all levels' Jacobians. Each
+        solver settles them its own way unless a posture task at the lowest level does."""
+        out = self.function(q, self.targets)
+        stacked = np.vstack([np.asarray(j) for j in out[self.depth :]])
+        return self.body.n - int(np.linalg.matrix_rank(stacked, tol=1e-9))
+
     def residual_norms(self, q: np.ndarray) -> np.ndarray:
         """‖e_k(q)‖ of every level (task units)."""
         out = self.function(q, self.targets)
