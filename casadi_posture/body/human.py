@@ -418,10 +418,23 @@ def _arm(
         ("hand", hand_dof, hand, wrist, "wrist", "knuckles"),
     )
     for name, dof, geometry, top, proximal, distal in parts:
-        com = _below(top, geometry.com_distance)
-        t.segment(
-            f"{name}_{side}", dof, geometry.mass, com, (f"{proximal}_{side}", f"{distal}_{side}")
-        )
+        _hanging(t, side, name, dof, geometry, top, (proximal, distal))
+
+
+def _hanging(
+    t: _Tree,
+    side: str,
+    name: str,
+    dof: str | None,
+    geometry: SegmentGeometry,
+    top: Point,
+    ends: tuple[str, str],
+) -> None:
+    """A limb segment of ``side`` hanging straight down from ``top`` at the zero posture,
+    between the landmarks ``ends`` (side suffix added)."""
+    com = _below(top, geometry.com_distance)
+    landmarks = (f"{ends[0]}_{side}", f"{ends[1]}_{side}")
+    t.segment(f"{name}_{side}", dof, geometry.mass, com, landmarks)
 
 
 def _leg_points(sk: Skeleton, side: str) -> dict[str, Point]:
@@ -459,20 +472,8 @@ def _leg_segments(
     thigh, shank, foot = segments["thigh"], segments["shank"], segments["foot"]
     for name in ("knee", "ankle", "heel", "toe"):
         t.landmark(f"{name}_{side}", carriers[name], p[name])
-    t.segment(
-        f"thigh_{side}",
-        carriers["thigh"],
-        thigh.mass,
-        _below(p["hip"], thigh.com_distance),
-        (f"hip_{side}", f"knee_{side}"),
-    )
-    t.segment(
-        f"shank_{side}",
-        carriers["shank"],
-        shank.mass,
-        _below(p["knee"], shank.com_distance),
-        (f"knee_{side}", f"ankle_{side}"),
-    )
+    _hanging(t, side, "thigh", carriers["thigh"], thigh, p["hip"], ("hip", "knee"))
+    _hanging(t, side, "shank", carriers["shank"], shank, p["knee"], ("knee", "ankle"))
     foot_com = (sk.heel_x + foot.com_distance, p["ankle"][1], sk.ankle_height / 2)
     t.segment(
         f"foot_{side}", carriers["foot"], foot.mass, foot_com, (f"heel_{side}", f"toe_{side}")
