@@ -13,6 +13,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Protocol
 
+import casadi as ca
 import numpy as np
 from numpy.polynomial import polynomial
 from numpy.typing import ArrayLike
@@ -38,6 +39,21 @@ class EnduranceModel(Protocol):
     def parameters(self, regions: Iterable[str]) -> list[Parameter]:
         """The parameter records the model uses for these joint regions."""
         ...
+
+    def expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX:
+        """The endurance [s] as a CasADi expression of a load [%MVC] that the model limits
+        (above 0 %MVC, and above the sustainable level where there is one), each coefficient
+        given by ``value(record)``: its number, or a symbol to differentiate with respect to."""
+        ...
+
+
+#: A parameter record's value in an expression: a number, or a CasADi symbol.
+Value = Callable[[Parameter], ca.SX | float]
+
+
+def numeric(record: Parameter) -> float:
+    """A record's own value (the :data:`Value` of a plain evaluation)."""
+    return record.value
 
 
 def _data(name: str) -> Parameter:
@@ -65,6 +81,10 @@ class Manenica:
         """Maximum holding time [s] of each load [%MVC]; ``region`` is ignored."""
         load = np.asarray(load_pct_mvc, dtype=float)
         return SECONDS_PER_MINUTE * np.exp(self.a.value - self.b.value * load)
+
+    def expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX:
+        """``60·exp(a − b·T_N)`` [s]."""
+        return SECONDS_PER_MINUTE * ca.exp(value(self.a) - value(self.b) * load_pct_mvc)
 
     def parameters(self, regions: Iterable[str]) -> list[Parameter]:
         """``a`` and ``b``, whatever the regions."""
@@ -102,6 +122,11 @@ class FreyLawAvin:
         positive = fraction > 0
         return np.where(positive, b0.value * np.where(positive, fraction, 1.0) ** b1.value, np.inf)
 
+    def expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX:
+        """``b0·f^b1`` [s] of ``region``, ``f = T_N/100 > 0``."""
+        b0, b1 = self._coefficients(region)
+        return value(b0) * (load_pct_mvc / PERCENT) ** value(b1)
+
     def parameters(self, regions: Iterable[str]) -> list[Parameter]:
         """``b0`` and ``b1`` of each distinct region, in order of first appearance."""
         return [p for region in dict.fromkeys(regions) for p in self._coefficients(region)]
@@ -135,6 +160,15 @@ class Rohmert:
         inverse = PERCENT / np.clip(load, self.sustainable_level.value, PERCENT)
         minutes = polynomial.polyval(inverse, self.coefficients.value)
         return np.where(held, SECONDS_PER_MINUTE * minutes, np.inf)
+
+    def expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX:
+        """``60·Σ c_k·(100/T_N)^k`` [s] for a load between the sustainable level and 100 %MVC
+        (the 100 %MVC value above it)."""
+        inverse = PERCENT / ca.fmin(load_pct_mvc, PERCENT)
+        c = value(self.coefficients)
+        return SECONDS_PER_MINUTE * sum(
+            c[k] * inverse**k for k in range(len(self.coefficients.value))
+        )
 
     def parameters(self, regions: Iterable[str]) -> list[Parameter]:
         """The coefficients and the sustainable level, whatever the regions."""

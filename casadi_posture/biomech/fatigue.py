@@ -13,10 +13,11 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from casadi_posture.biomech.endurance import PERCENT, EnduranceModel
+from casadi_posture.biomech.endurance import PERCENT, EnduranceModel, Value
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import Parameter
 from casadi_posture.errors import ProblemError
@@ -45,6 +46,12 @@ class FatigueModel(Protocol):
     def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
         """Time [s] from rest to a fatigue level of 1 under each constant load [%MVC]: the static
         endurance by the same rule as :meth:`step` (``inf`` where no fatigue accumulates)."""
+        ...
+
+    def endurance_expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX | None:
+        """:meth:`endurance_time_s` [s] as a CasADi expression of a load [%MVC] at which it is
+        finite, each parameter record given by ``value(record)``; None where the time is found
+        by time stepping (no derivative)."""
         ...
 
     def rule(self) -> str:
@@ -186,6 +193,15 @@ class HoldingTimeFatigue:
         reaches = settled > 1.0
         ratio = np.where(reaches, 1.0 / np.where(reaches, settled, 2.0), 0.5)
         return np.where(reaches, -np.log1p(-ratio) / decay, np.inf)
+
+    def endurance_expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX:
+        """``ET`` (``threshold``) or ``−ln(1 − ET·R_j)/R_j`` (``continuous``) [s] of a loaded
+        group (``T_N > T_0``)."""
+        seconds = self.endurance.expression(load_pct_mvc, region, value)
+        if not self._continuous:
+            return seconds
+        decay = value(_region_rates([region], "recovery_rate")[region])
+        return -ca.log1p(-seconds * decay) / decay
 
     def rule(self) -> str:
         """The law, its endurance model and ``T_0``."""
@@ -373,6 +389,10 @@ class ThreeCompartmentFatigue:
         ratio = recovery_rate * (PERCENT - target[running]) / (fatigue_rate * target[running])
         times[running] = np.maximum(-np.log1p(-ratio) / recovery_rate, horizon)
         return times.reshape(load.shape)
+
+    def endurance_expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> None:
+        """None: the 3CC time to failure is found by time stepping (:meth:`endurance_time_s`)."""
+        return None
 
     def rule(self) -> str:
         """``3cc_r`` and its sustainable loads."""
