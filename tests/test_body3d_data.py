@@ -93,16 +93,40 @@ HARBO = {
     "wrist_flexors": {"male": (-6.9, -0.07, 10, 0.21), "female": (-22.2, -0.04, 23, 0.0)},
 }
 
-#: Anderson, Madigan & Nussbaum 2007 Table 3, young adults (rbdl Millard2016TorqueMuscle.cc
-#: Anderson2007Table3Mean / Std): (c1 mean, c1 SD) per sex.
+#: Anderson, Madigan & Nussbaum 2007 Table 3 (rbdl Millard2016TorqueMuscle.cc
+#: Anderson2007Table3Mean / Std): (c1 mean, c1 SD) per sex and age group.
 ANDERSON = {
-    "hip_extensors": {"male": (0.161, 0.049), "female": (0.181, 0.047)},
-    "hip_flexors": {"male": (0.113, 0.025), "female": (0.127, 0.033)},
-    "knee_extensors": {"male": (0.163, 0.040), "female": (0.159, 0.028)},
-    "knee_flexors": {"male": (0.087, 0.015), "female": (0.080, 0.015)},
-    "ankle_plantarflexors": {"male": (0.095, 0.022), "female": (0.104, 0.034)},
-    "ankle_dorsiflexors": {"male": (0.033, 0.005), "female": (0.027, 0.006)},
+    "hip_extensors": {
+        "male": {"young": (0.161, 0.049), "middle_aged": (0.171, 0.043), "older": (0.144, 0.039)},
+        "female": {"young": (0.181, 0.047), "middle_aged": (0.140, 0.032), "older": (0.138, 0.003)},
+    },
+    "hip_flexors": {
+        "male": {"young": (0.113, 0.025), "middle_aged": (0.107, 0.020), "older": (0.101, 0.025)},
+        "female": {"young": (0.127, 0.033), "middle_aged": (0.091, 0.016), "older": (0.081, 0.008)},
+    },
+    "knee_extensors": {
+        "male": {"young": (0.163, 0.040), "middle_aged": (0.156, 0.031), "older": (0.137, 0.017)},
+        "female": {"young": (0.159, 0.028), "middle_aged": (0.128, 0.016), "older": (0.124, 0.018)},
+    },
+    "knee_flexors": {
+        "male": {"young": (0.087, 0.015), "middle_aged": (0.081, 0.017), "older": (0.069, 0.022)},
+        "female": {"young": (0.080, 0.015), "middle_aged": (0.060, 0.015), "older": (0.060, 0.005)},
+    },
+    "ankle_plantarflexors": {
+        "male": {"young": (0.095, 0.022), "middle_aged": (0.114, 0.029), "older": (0.106, 0.035)},
+        "female": {"young": (0.104, 0.034), "middle_aged": (0.093, 0.026), "older": (0.125, 0.006)},
+    },
+    "ankle_dorsiflexors": {
+        "male": {"young": (0.033, 0.005), "middle_aged": (0.028, 0.005), "older": (0.029, 0.002)},
+        "female": {"young": (0.027, 0.006), "middle_aged": (0.024, 0.002), "older": (0.022, 0.003)},
+    },
 }
+
+
+def _anderson_age_group(age: float) -> str:
+    """The documented rule: < 40 y young, 40-65 y middle-aged, > 65 y older."""
+    return "young" if age < 40 else "middle_aged" if age <= 65 else "older"
+
 
 #: RBDL Gymnast τ_ISO [N·m] (GymnastWholeBody); elbow flexion 101.384.
 GYMNAST = {
@@ -164,14 +188,26 @@ def test_harbo_sex_and_reference_values() -> None:
 @pytest.mark.parametrize("body", BODIES, ids=lambda b: f"{b['sex']}-{b['age']:g}")
 @pytest.mark.parametrize("group", sorted(ANDERSON))
 def test_anderson_groups_by_hand(group: str, body: dict) -> None:
-    c1, sd = ANDERSON[group][body["sex"]]
+    age_group = _anderson_age_group(body["age"])
+    c1, sd = ANDERSON[group][body["sex"]][age_group]
     mgh = body["body_mass"] * G * body["stature"]
     model, record = default_strength(group, **body)
     assert model.value == pytest.approx(c1 * mgh, rel=1e-12)
     assert f"SD {sd:g} × m·g·h = {sd * mgh:.2f} N·m" in record.source
     table = parameters.load("strength")
-    stored = table[f"strength.anderson_2007.{group}.{body['sex']}.c1_sd"]
+    stored = table[f"strength.anderson_2007.{group}.{body['sex']}.{age_group}.c1_sd"]
     assert stored.value == sd and stored.unit == "1"
+
+
+@pytest.mark.parametrize("age", [18.0, 39.9, 40.0, 65.0, 65.1, 100.0])
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_anderson_rows_by_age(age: float, sex: str) -> None:
+    """Every Anderson age group is reached at its ages, on both sides of each boundary."""
+    c1, _ = ANDERSON["knee_flexors"][sex][_anderson_age_group(age)]
+    body = {**MALE, "sex": sex, "age": age}
+    model, record = default_strength("knee_flexors", **body)
+    assert model.value == pytest.approx(c1 * body["body_mass"] * G * body["stature"], rel=1e-12)
+    assert f"age {age:g} y: the" in record.source
 
 
 def test_anderson_reference_values() -> None:

@@ -59,8 +59,8 @@ def default_strength(
     without it are used, the record keeps the full name. By the table the group is in:
     the elbow flexors from the Harbo et al. 2012 regression at this stature [m], body mass
     [kg] and age [years] times the group's Gymnast strength ratio; the group's own Harbo
-    regression; Anderson et al. 2007 c1·m·g·h (young adults, age not used); or our
-    estimate c·m·g·h. The record's source shows the computation.
+    regression; Anderson et al. 2007 c1·m·g·h of the sex and age group (:func:`anderson_row`);
+    or our estimate c·m·g·h. The record's source shows the computation.
     """
     group = data_name(half_joint)
     table = parameters.load("strength")
@@ -81,14 +81,14 @@ def default_strength(
             f" = {value:.2f} N·m ({record.source})"
         )
         evidence = record.evidence
-    elif f"strength.anderson_2007.{group}.{sex}.c1" in table:
-        record = table[f"strength.anderson_2007.{group}.{sex}.c1"]
-        sd = table[f"strength.anderson_2007.{group}.{sex}.c1_sd"].value
+    elif (row := anderson_row(group, sex, age)) is not None:
+        record, sd_record, rule = row
+        sd = sd_record.value
         g = table["strength.anderson_2007.gravity"].value
         mgh = body_mass * g * stature
         value = record.value * mgh
         source = (
-            f"Anderson 2007 c1·m·g·h ({sex}, young adults, age not used): {record.value:g} × "
+            f"Anderson 2007 c1·m·g·h ({sex}, {rule}): {record.value:g} × "
             f"{body_mass:g} kg × {g:g} m/s² × {stature:g} m = {value:.2f} N·m; "
             f"SD {sd:g} × m·g·h = {sd * mgh:.2f} N·m ({record.source})"
         )
@@ -124,11 +124,44 @@ def _harbo(
     return value, c, table[f"strength.{prefix}.{sex}.intercept"]
 
 
+#: Anderson 2007's age groups: our name and the ages of its sample.
+ANDERSON_AGE_GROUPS = {"young": "18-25 y", "middle_aged": "55-65 y", "older": "> 65 y"}
+#: Records of the ``anderson_2007`` table that are not muscle groups.
+_ANDERSON_SETTINGS = ("gravity", "middle_aged_from_years", "older_above_years")
+
+
+def anderson_age_group(age: float) -> tuple[str, str]:
+    """The Anderson 2007 age group for a body of ``age`` [years], and the rule in words:
+    young below ``middle_aged_from_years`` (40), middle-aged up to ``older_above_years``
+    (65), older above (``strength.toml``)."""
+    table = parameters.load("strength")
+    middle = table["strength.anderson_2007.middle_aged_from_years"].value
+    older = table["strength.anderson_2007.older_above_years"].value
+    name = "young" if age < middle else "middle_aged" if age <= older else "older"
+    rule = (
+        f"age {age:g} y: the {name.replace('_', '-')} row ({ANDERSON_AGE_GROUPS[name]}; "
+        f"rule: < {middle:g} y young, {middle:g}-{older:g} y middle-aged, > {older:g} y older)"
+    )
+    return name, rule
+
+
+def anderson_row(group: str, sex: str, age: float) -> tuple[Parameter, Parameter, str] | None:
+    """The Anderson 2007 records ``c1`` and ``c1_sd`` of ``group`` (a name without side
+    suffix) for ``sex`` at ``age`` [years], and the age rule in words; None when the group has
+    no Anderson data."""
+    name, rule = anderson_age_group(age)
+    prefix = f"strength.anderson_2007.{group}.{sex}.{name}"
+    table = parameters.load("strength")
+    if f"{prefix}.c1" not in table:
+        return None
+    return table[f"{prefix}.c1"], table[f"{prefix}.c1_sd"], rule
+
+
 def known_groups() -> Sequence[str]:
     """Half-joints with a shipped default strength (names without a side suffix)."""
     groups: dict[str, None] = {}
     for name in parameters.load("strength"):
         parts = name.split(".")  # strength.<table>.<group>...
-        if len(parts) > 2 and parts[1] in _GROUP_TABLES and parts[2] != "gravity":
+        if len(parts) > 2 and parts[1] in _GROUP_TABLES and parts[2] not in _ANDERSON_SETTINGS:
             groups.setdefault(parts[2], None)
     return list(groups)
