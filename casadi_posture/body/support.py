@@ -37,7 +37,7 @@ def sole_points(body: BodyModel, foot: Foot) -> ca.SX:
 
 def _sole_centre(body: BodyModel, foot: Foot) -> ca.SX:
     """World position of a foot's sole centre (the mean of its outline)."""
-    return body.point(foot.dof, np.mean(np.asarray(foot.outline, dtype=float), axis=0))
+    return body.point(foot.dof, ca.vertsplit(foot.centre()))
 
 
 def carried_foot(body: BodyModel) -> Foot | None:
@@ -62,7 +62,7 @@ def reaction_torque(
     moment += sum(moments, ca.SX.zeros(3))
     weight = -total[2]
     pressure = ca.vertcat(-moment[1] / total[2], moment[0] / total[2])
-    root_centre = np.mean(np.asarray(root.outline, dtype=float), axis=0)[:2]
+    root_centre = root.centre()[:2]
     centre = _sole_centre(body, foot)
     line = centre[:2] - root_centre
     share = ca.dot(pressure - root_centre, line) / ca.dot(line, line)

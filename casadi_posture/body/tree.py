@@ -26,11 +26,19 @@ from casadi_posture.errors import ProblemError
 Vector3 = tuple[float, float, float]
 
 
+def column(values: Sequence[float | ca.SX]) -> ca.DM | ca.SX:
+    """A point or vector [m] as a CasADi column: DM of numbers, SX where a coordinate is a
+    symbol (a body whose geometry depends on parameters, as sensitivities build it)."""
+    return ca.vertcat(*values)
+
+
 @dataclass(frozen=True)
 class Dof:
     """A revolute degree of freedom and its two half-joints (antagonistic muscle groups).
 
-    ``origin`` [m] and ``axis`` are in the world frame at the zero posture;
+    ``origin`` [m] and ``axis`` are in the world frame at the zero posture (numbers; the
+    origin, a segment's mass and centre of mass, a landmark's and a sole's points may be
+    CasADi symbols: every expression of the body is then one of them too);
     ``lower``/``upper`` [rad] bound the angle. ``positive`` is the muscle group
     that drives the angle up, ``negative`` the one that drives it down;
     ``regions`` names the joint region of each one's endurance data (positive, negative).
@@ -81,6 +89,10 @@ class Foot:
     dof: str | None
     outline: tuple[Vector3, ...]
 
+    def centre(self) -> ca.DM | ca.SX:
+        """The mean of the sole's outline [m, world, zero posture]."""
+        return sum(column(p) for p in self.outline) / len(self.outline)
+
 
 @dataclass(frozen=True)
 class HalfJoint:
@@ -125,11 +137,11 @@ class BodyModel:
         self.q = ca.SX.sym("q", len(self.dofs))
         self._rotation: dict[str | None, ca.SX] = {None: ca.SX.eye(3)}
         self._origin: dict[str | None, ca.SX] = {None: ca.SX.zeros(3)}
-        self._origin0: dict[str | None, np.ndarray] = {None: np.zeros(3)}
+        self._origin0: dict[str | None, ca.DM | ca.SX] = {None: ca.DM.zeros(3)}
         for i, dof in enumerate(self.dofs):
             r_parent = self._rotation[dof.parent]
-            origin0 = np.asarray(dof.origin, dtype=float)
-            offset = ca.DM(origin0 - self._origin0[dof.parent])
+            origin0 = column(dof.origin)
+            offset = origin0 - self._origin0[dof.parent]
             self._origin[dof.name] = self._origin[dof.parent] + r_parent @ offset
             self._rotation[dof.name] = r_parent @ rotation(self.axis(dof.name), self.q[i])
             self._origin0[dof.name] = origin0
@@ -163,7 +175,7 @@ class BodyModel:
             if dof_name is not None and dof_name not in seen:
                 raise ProblemError(None, f"{key}.dof", dof_name, f"one of {sorted(seen)}")
         for segment in self.segments:
-            if segment.mass < 0:
+            if not isinstance(segment.mass, ca.SX) and segment.mass < 0:
                 raise ProblemError(
                     None, f"body.segments.{segment.name}.mass_kg", segment.mass, "a mass >= 0"
                 )
@@ -220,8 +232,8 @@ class BodyModel:
 
     def point(self, dof: str | None, position0: Sequence[float]) -> ca.SX:
         """World position [m] of a point carried by ``dof``, given at the zero posture."""
-        x0 = np.asarray(position0, dtype=float) - self._origin0[dof]
-        return self._origin[dof] + self._rotation[dof] @ ca.DM(x0)
+        x0 = column(position0) - self._origin0[dof]
+        return self._origin[dof] + self._rotation[dof] @ x0
 
     def landmark(self, name: str) -> ca.SX:
         """World position [m] of a landmark."""
@@ -236,7 +248,7 @@ class BodyModel:
         """Centre of mass [m] of the body and the ``carried`` point masses (landmark, kg)."""
         weighted = sum((s.mass * self.segment_com(s) for s in self.segments), ca.SX.zeros(3))
         weighted += sum((m * self.landmark(at) for at, m in carried), ca.SX.zeros(3))
-        return weighted / (self.total_mass + sum(m for _, m in carried))
+        return weighted / (sum(s.mass for s in self.segments) + sum(m for _, m in carried))
 
     def angular_jacobian(self, dof: str | None) -> ca.SX:
         """3×n map from joint rates to the angular velocity of the frame of ``dof``."""

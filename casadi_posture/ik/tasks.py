@@ -134,18 +134,23 @@ class Orientation(Task):
 @dataclass(frozen=True)
 class CentreOfMass(Task):
     """Centre of mass of the body and the ``carried`` point masses (landmark, kg) over a
-    target in the listed world axes [m] (balance)."""
+    target in the listed world axes [m] (balance). Its parameters are the target's
+    coordinates, then the carried masses [kg] (so a held mass can change, or be
+    differentiated with respect to, without rebuilding)."""
 
     target: tuple[float, float, float]
     axes: str
     carried: tuple[tuple[str, float], ...] = ()
 
     def targets(self) -> np.ndarray:
-        return np.array([self.target["xyz".index(a)] for a in self.axes], dtype=float)
+        point = [self.target["xyz".index(a)] for a in self.axes]
+        return np.array(point + [m for _, m in self.carried], dtype=float)
 
     def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
-        com = body.com(self.carried)
-        return ca.vertcat(*[com["xyz".index(a)] for a in self.axes]) - p
+        k = len(self.axes)
+        carried = [(at, p[k + i]) for i, (at, _) in enumerate(self.carried)]
+        com = body.com(carried)
+        return ca.vertcat(*[com["xyz".index(a)] for a in self.axes]) - p[:k]
 
 
 @dataclass(frozen=True)
@@ -162,10 +167,10 @@ class Feet(Task):
         for foot in body.feet:
             if foot.dof is None:
                 continue
-            centre = np.mean(np.asarray(foot.outline, dtype=float), axis=0)
+            centre = foot.centre()
             r = body.rotation(foot.dof)
             skew = 0.5 * (r.T - r)
-            rows += [body.point(foot.dof, centre) - ca.DM(centre)]
+            rows += [body.point(foot.dof, ca.vertsplit(centre)) - centre]
             rows += [ca.vertcat(skew[2, 1], skew[0, 2], skew[1, 0])]
         return ca.vertcat(*rows)
 
@@ -269,7 +274,7 @@ def task_from_spec(
         if spec.target_m is not None:
             return replace(task, target=tuple(spec.target_m))
         whole = replace(task, axes="xyz")
-        com = ca.Function("com", [body.q], [whole.residual(body, ca.SX.zeros(3))])
+        com = ca.Function("com", [body.q], [body.com(whole.carried)])
         at = np.zeros(body.n) if posture is None else posture
         return replace(task, target=tuple(np.asarray(com(at)).ravel()))
     if isinstance(spec, FeetTask):
