@@ -62,12 +62,9 @@ class TorqueModel:
         self.loads = tuple(loads)
         q = body.q
         p = ca.SX.sym("loads", LOAD_PARAMETERS * len(self.loads))
-        self.tau_ext = self._external(p)
-        self.tau_pas = ca.vertcat(
-            *[passive[d.name].expression(q[i]) for i, d in enumerate(body.dofs)]
+        self.tau_ext, self.tau_pas, self.tau_act, self.strength = torque_expressions(
+            body, self.loads, p, passive, strength
         )
-        self.tau_act = -(self.tau_pas + self.tau_ext)
-        self.strength = ca.vertcat(*[strength[h.name].expression(q) for h in body.half_joints])
         self.p = p
         self.function = ca.Function(
             "torques",
@@ -77,25 +74,6 @@ class TorqueModel:
             ["tau_ext", "tau_pas", "tau_act", "strength", "dtau_ext"],
         )
         self.default_loads = pack(self.loads)
-
-    def _external(self, p: ca.SX) -> ca.SX:
-        body = self.body
-        g = ca.DM([0.0, 0.0, -body.gravity])
-        forces = [(body.segment_com(s), s.mass * g) for s in body.segments]
-        moments = []
-        tau = ca.SX.zeros(body.n)
-        for point, force in forces:
-            tau += body.jacobian(point).T @ force
-        for k, load in enumerate(self.loads):
-            mass = p[LOAD_PARAMETERS * k]
-            force = mass * g + p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
-            moment = p[LOAD_PARAMETERS * k + 4 : LOAD_PARAMETERS * k + 7]
-            point = body.landmark(load.at)
-            tau += body.jacobian(point).T @ force
-            tau += body.angular_jacobian(body.landmarks[load.at].dof).T @ moment
-            forces.append((point, force))
-            moments.append(moment)
-        return tau + reaction_torque(body, forces, moments)
 
     def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
         """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own."""
@@ -108,3 +86,40 @@ class TorqueModel:
         return Torques(
             np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried, np.asarray(out[4])
         )
+
+
+def torque_expressions(
+    body: BodyModel,
+    loads: Sequence[Load],
+    p: ca.SX,
+    passive: Mapping[str, PassiveTorque],
+    strength: Mapping[str, Strength],
+) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+    """External, passive and active torque per DOF [N·m] and strength per half-joint [N·m]
+    as expressions of ``body.q`` and the load vector ``p`` (:func:`pack`); the body's
+    geometry and the models' coefficients may be symbols too."""
+    q = body.q
+    tau_ext = _external(body, loads, p)
+    tau_pas = ca.vertcat(*[passive[d.name].expression(q[i]) for i, d in enumerate(body.dofs)])
+    st = ca.vertcat(*[strength[h.name].expression(q) for h in body.half_joints])
+    return tau_ext, tau_pas, -(tau_pas + tau_ext), st
+
+
+def _external(body: BodyModel, loads: Sequence[Load], p: ca.SX) -> ca.SX:
+    """τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M, the floor's reaction included [N·m]."""
+    g = ca.DM([0.0, 0.0, -body.gravity])
+    forces = [(body.segment_com(s), s.mass * g) for s in body.segments]
+    moments = []
+    tau = ca.SX.zeros(body.n)
+    for point, force in forces:
+        tau += body.jacobian(point).T @ force
+    for k, load in enumerate(loads):
+        mass = p[LOAD_PARAMETERS * k]
+        force = mass * g + p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
+        moment = p[LOAD_PARAMETERS * k + 4 : LOAD_PARAMETERS * k + 7]
+        point = body.landmark(load.at)
+        tau += body.jacobian(point).T @ force
+        tau += body.angular_jacobian(body.landmarks[load.at].dof).T @ moment
+        forces.append((point, force))
+        moments.append(moment)
+    return tau + reaction_torque(body, forces, moments)
