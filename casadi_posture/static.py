@@ -18,6 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
+from casadi_posture.biomech.capability import Capability, capability, population
 from casadi_posture.biomech.torques import Torques
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
@@ -127,7 +128,8 @@ class Level:
 @dataclass(frozen=True)
 class StaticAnswer:
     """Torques, loads and endurances at one posture: the problem's own (:func:`at_posture`)
-    or the one the IK solves for (:func:`solve`, which sets ``ik`` and ``levels``).
+    or the one the IK solves for (:func:`solve`, which sets ``ik`` and ``levels``), and the
+    share of men and women able to exert its torques (``capable``, biomech/capability.py).
     ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can)."""
 
     problem: Problem
@@ -136,6 +138,7 @@ class StaticAnswer:
     ik: IKResult | None
     levels: tuple[Level, ...]
     flags: tuple[str, ...]
+    capable: Capability
 
     def __repr__(self) -> str:
         group = self.limiting
@@ -203,9 +206,44 @@ class StaticAnswer:
             for g in self.groups
         ]
 
+    def capable_groups(self) -> list[dict[str, float | str]]:
+        """Per half-joint the share of men and of women able to exert its torque [%], the
+        population mean and SD of each sex [N·m], where the means come from, and the SD's
+        source and status (``measured``: a study's SD; ``estimate``: our CV)."""
+        return [
+            {
+                "name": c.name,
+                "torque_Nm": c.required,
+                "capable_male_pct": c.capable_pct["male"],
+                "capable_female_pct": c.capable_pct["female"],
+                "mean_male_Nm": c.population.mean["male"],
+                "mean_female_Nm": c.population.mean["female"],
+                "sd_male_Nm": c.population.sd["male"],
+                "sd_female_Nm": c.population.sd["female"],
+                "mean_source": c.population.source,
+                "sd_status": c.population.sd_status,
+                "sd_source": c.population.sd_source,
+            }
+            for c in self.capable.groups
+        ]
+
+    def capable_report(self) -> dict[str, object]:
+        """The share of men and of women capable of the task [%] with its weakest group and
+        the design limit, the notes, which SDs are estimates, and :meth:`capable_groups`."""
+        return {
+            **self.capable.to_dict(),
+            "notes": self.capable.notes(),
+            "sd_note": self.capable.sd_line(),
+            "half_joints": self.capable_groups(),
+        }
+
     def to_frame(self) -> object:
         """The half-joints as a pandas DataFrame (needs pandas)."""
         return frame(self.half_joints())
+
+    def capable_frame(self) -> object:
+        """:meth:`capable_groups` as a pandas DataFrame (needs pandas)."""
+        return frame(self.capable_groups())
 
     def dofs_frame(self) -> object:
         """The DOFs' torques as a pandas DataFrame (needs pandas)."""
@@ -220,7 +258,9 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     """Torques and loads at ``q`` [rad] (default: the problem's ``posture_deg``)."""
     torques = problem.torque_model().evaluate(problem.posture if q is None else q)
     groups = tuple(group_loads(problem, torques))
-    return StaticAnswer(problem, torques, groups, None, (), tuple(_over_strength(groups)))
+    capable = capability(population(problem, torques.strength), torques.half_joint_torque)
+    flags = tuple(_over_strength(groups))
+    return StaticAnswer(problem, torques, groups, None, (), flags, capable)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
@@ -247,7 +287,13 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
             "blocked by a joint limit (positions are in metres)"
         )
     return StaticAnswer(
-        problem, answer.torques, answer.groups, result, levels, (*flags, *answer.flags)
+        problem,
+        answer.torques,
+        answer.groups,
+        result,
+        levels,
+        (*flags, *answer.flags),
+        answer.capable,
     )
 
 

@@ -156,6 +156,8 @@ def echo_torques(answer: StaticAnswer) -> None:
                 "load (%MVC)",
                 "endurance (min)",
                 "verdict",
+                "capable men (%)",
+                "capable women (%)",
             ],
             [
                 [
@@ -166,13 +168,19 @@ def echo_torques(answer: StaticAnswer) -> None:
                     g.load_pct_mvc,
                     g.endurance_min,
                     g.verdict.upper() if g.over_strength else g.verdict,
+                    c.capable_pct["male"],
+                    c.capable_pct["female"],
                 ]
-                for g in answer.groups
+                for g, c in zip(answer.groups, answer.capable.groups, strict=True)
             ],
             digits=2,
         )
     )
     click.echo(f"\nendurance rule: {answer.rule}")
+    click.echo(answer.capable.task_line())
+    click.echo(answer.capable.sd_line())
+    for note in answer.capable.notes():
+        click.echo(f"note: {note}")
 
 
 def echo_free_dofs(problem: Problem) -> None:

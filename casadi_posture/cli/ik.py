@@ -66,6 +66,7 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
                 "inequality_active": result.inequality_active,
                 "endurance_rule": answer.rule,
                 "torques": {"dofs": answer.dofs(), "half_joints": answer.half_joints()},
+                "capable": answer.capable_report(),
             }
         )
     else:

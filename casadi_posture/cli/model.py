@@ -216,6 +216,7 @@ def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_j
                 "flags": list(answer.flags),
                 "dofs": answer.dofs(),
                 "half_joints": answer.half_joints(),
+                "capable": answer.capable_report(),
             }
         )
     else:

@@ -1,0 +1,157 @@
+"""% of the population capable: the normal model against an independent normal CDF
+(``statistics.NormalDist``) with the sources' numbers typed here, its behaviour in the load,
+the task's share as the weakest group's, file-set strengths and the SDs' provenance."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from statistics import NormalDist
+
+import casadi as ca
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import casadi_posture as cp
+from casadi_posture.biomech.capability import SEXES, share_capable
+from casadi_posture.cli import main
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+G = 9.81
+#: Harbo et al. 2012 elbow flexion, male: intercept, age, stature [m], mass [kg]; the Gymnast
+#: shoulder-flexion ratio; our population CV (an estimate).
+HARBO_MALE, HARBO_FEMALE = (-23.8, -0.13, 22.0, 0.51), (6.9, -0.13, 9.0, 0.18)
+SHOULDER_FLEXION_RATIO, CV = 0.899, 0.28
+
+
+def _above(mean: float, sd: float, required: float) -> float:
+    """Share [%] of N(mean, sd²) at or above ``required``, by the standard library."""
+    return 100.0 * (1.0 - NormalDist(mean, sd).cdf(required))
+
+
+def _harbo(c: tuple[float, float, float, float], age: float, h: float, m: float) -> float:
+    return c[0] + c[1] * age + c[2] * h + c[3] * m
+
+
+@pytest.fixture(scope="module")
+def standing() -> cp.StaticAnswer:
+    return cp.torques(cp.load(PROBLEMS / "standing_shelf_box.toml"))
+
+
+def _group(answer: cp.StaticAnswer, name: str) -> dict:
+    return next(g for g in answer.capable_groups() if g["name"] == name)
+
+
+def test_anderson_group_by_hand(standing: cp.StaticAnswer) -> None:
+    """Right hip extensors of the 30-year-old reference male: Anderson 2007 young adults,
+    c1 0.161 ± 0.049 (men), 0.181 ± 0.047 (women), times m·g·h."""
+    body = standing.problem.spec.body
+    mgh = body.mass_kg * G * body.stature_m
+    group = _group(standing, "hip_extensors_r")
+    tau = group["torque_Nm"]
+    assert tau > 1.0  # loaded, so the share is not the carries-nothing 100 %
+    assert group["capable_male_pct"] == pytest.approx(
+        _above(0.161 * mgh, 0.049 * mgh, tau), abs=1e-9
+    )
+    assert group["capable_female_pct"] == pytest.approx(
+        _above(0.181 * mgh, 0.047 * mgh, tau), abs=1e-9
+    )
+    assert group["sd_status"] == "measured" and "Anderson 2007" in group["sd_source"]
+
+
+def test_cv_estimate_group_by_hand(standing: cp.StaticAnswer) -> None:
+    """Right shoulder flexors: Harbo elbow flexion of each sex at the male body's size × the
+    Gymnast ratio, SD = 0.28 × mean (our estimate)."""
+    body = standing.problem.spec.body
+    size = (body.age_years, body.stature_m, body.mass_kg)
+    group = _group(standing, "shoulder_flexors_r")
+    tau = group["torque_Nm"]
+    for sex, coefficients in (("male", HARBO_MALE), ("female", HARBO_FEMALE)):
+        mean = _harbo(coefficients, *size) * SHOULDER_FLEXION_RATIO
+        assert group[f"mean_{sex}_Nm"] == pytest.approx(mean, rel=1e-12)
+        assert group[f"capable_{sex}_pct"] == pytest.approx(_above(mean, CV * mean, tau), abs=1e-9)
+    assert group["sd_status"] == "estimate" and "CV 0.28" in group["sd_source"]
+
+
+def test_older_rows_by_age() -> None:
+    """A 70-year-old woman's knee extensors take Anderson's older row: 0.124 ± 0.018; a
+    50-year-old man's the middle-aged one: 0.156 ± 0.031."""
+    for sex, age, c1, sd in (("female", 70.0, 0.124, 0.018), ("male", 50.0, 0.156, 0.031)):
+        problem = cp.load(
+            PROBLEMS / "standing_shelf_box.toml", {"body.age_years": age, "body.sex": sex}
+        )
+        answer = cp.torques(problem)
+        mgh = problem.spec.body.mass_kg * G * problem.spec.body.stature_m
+        group = _group(answer, "knee_extensors_r")
+        assert group[f"mean_{sex}_Nm"] == pytest.approx(c1 * mgh, rel=1e-12)
+        assert group[f"sd_{sex}_Nm"] == pytest.approx(sd * mgh, rel=1e-12)
+
+
+def test_share_decreases_with_the_load() -> None:
+    """More mass at the wrist, a smaller share of both sexes, strictly."""
+    shares = {sex: [] for sex in SEXES}
+    for mass in (0.0, 1.0, 2.5, 5.0, 8.0):
+        problem = cp.load(PROBLEMS / "holding_horizontal.toml", {"loads[0].mass_kg": mass})
+        answer = cp.torques(problem)
+        for sex in SEXES:
+            shares[sex].append(answer.capable.share(sex))
+    for sex in SEXES:
+        assert np.all(np.diff(shares[sex]) < 0), shares[sex]
+    assert shares["female"][-1] < shares["male"][-1]
+
+
+def test_task_share_is_the_weakest_group(standing: cp.StaticAnswer) -> None:
+    groups = standing.capable_groups()
+    report = standing.capable_report()
+    for sex in SEXES:
+        values = [g[f"capable_{sex}_pct"] for g in groups]
+        assert report[sex]["capable_pct"] == min(values) < 100.0
+        assert report[sex]["weakest_group"] == groups[int(np.argmin(values))]["name"]
+    unloaded = [g for g in groups if g["torque_Nm"] == 0.0]
+    assert unloaded and all(g["capable_male_pct"] == 100.0 for g in unloaded)
+
+
+def test_a_file_set_strength_is_the_mean_of_both_sexes() -> None:
+    problem = cp.load(
+        PROBLEMS / "holding_m45.toml", {"body.half_joints.shoulder_flexors.strength_Nm": 30.0}
+    )
+    answer = cp.torques(problem)
+    group = _group(answer, "shoulder_flexors")
+    tau = group["torque_Nm"]
+    for sex in SEXES:
+        assert group[f"mean_{sex}_Nm"] == 30.0 and group[f"sd_{sex}_Nm"] == pytest.approx(8.4)
+        assert group[f"capable_{sex}_pct"] == pytest.approx(_above(30.0, 8.4, tau), abs=1e-9)
+    assert "problem's own strength" in group["mean_source"]
+    assert "shipped default" in _group(answer, "elbow_flexors")["mean_source"]
+
+
+def test_share_capable_on_floats_arrays_and_casadi() -> None:
+    """One formula for floats, numpy arrays and CasADi expressions (an NLP maximises it); its
+    derivative in the required torque is minus the normal density ×100, by AD."""
+    mean, sd = 50.0, 14.0
+    required = np.array([0.0, 20.0, 50.0, 80.0])
+    expected = [_above(mean, sd, t) for t in required]
+    assert share_capable(mean, sd, required) == pytest.approx(expected, abs=1e-12)
+    assert [share_capable(mean, sd, float(t)) for t in required] == pytest.approx(expected)
+    tau = ca.SX.sym("tau")
+    share = share_capable(mean, sd, tau)
+    f = ca.Function("f", [tau], [share, ca.jacobian(share, tau)])
+    for t, want in zip(required, expected, strict=True):
+        value, slope = (float(v) for v in f(t))
+        assert value == pytest.approx(want, abs=1e-12)
+        density = math.exp(-0.5 * ((t - mean) / sd) ** 2) / (sd * math.sqrt(2 * math.pi))
+        assert slope == pytest.approx(-100.0 * density, rel=1e-9)
+
+
+def test_cli_shows_the_columns_and_the_sd_sources() -> None:
+    runner = CliRunner()
+    problem = str(PROBLEMS / "holding_m45.toml")
+    text = runner.invoke(main, ["torques", problem]).output
+    assert "capable men (%)" in text and "capable women (%)" in text
+    assert "capable of the task: 99.3 % of men (weakest: shoulder_flexors)" in text
+    assert "population SDs: CV 0.28 × mean, our estimate, for every group" in text
+    data = json.loads(runner.invoke(main, ["torques", problem, "--json"]).output)
+    assert {g["sd_status"] for g in data["capable"]["half_joints"]} == {"estimate"}
+    assert data["capable"]["female"]["weakest_group"] == "shoulder_flexors"
