@@ -1,0 +1,161 @@
+"""The design command: task targets chosen by one NLP to maximise endurance or % capable."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import click
+import numpy as np
+
+from casadi_posture import api
+from casadi_posture.cli.common import FORCE_OPTION, SET_OPTION, emit_json, main, problem_from
+from casadi_posture.design import OBJECTIVES, Design, design, parse_free, sweep
+from casadi_posture.output.design_plots import SWEEP_POINTS, plot_loads, plot_sweep
+from casadi_posture.output.plain import dumps
+from casadi_posture.output.report import fmt, table
+
+
+@main.command(name="design")
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--free",
+    "free",
+    multiple=True,
+    required=True,
+    metavar="KEY=LO:HI",
+    help="A task target coordinate to choose within [LO, HI] m (repeatable); "
+    "KEY1,KEY2=LO:HI ties keys to one value (two hands on one shelf).",
+)
+@click.option(
+    "--objective",
+    type=click.Choice(OBJECTIVES),
+    default="endurance",
+    show_default=True,
+    help="Maximise the task's static endurance or the share of men or women capable.",
+)
+@click.option(
+    "--keep-levels",
+    type=int,
+    default=None,
+    help="Keep only the first N priority levels as equalities [default: every level the "
+    "IK achieves at the start].",
+)
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Write design.json and design.png into this folder (new or empty, or --force).",
+)
+@SET_OPTION
+@FORCE_OPTION
+def design_command(
+    problem: str,
+    free: tuple[str, ...],
+    objective: str,
+    keep_levels: int | None,
+    as_json: bool,
+    out: Path | None,
+    sets: tuple[str, ...],
+    force: bool,
+) -> None:
+    """Choose task target coordinates (a shelf's height, a line's position) within bounds
+    to maximise the task's static endurance or its share of people capable, by one NLP
+    over the posture and the design (IPOPT), the task kept and joint limits respected.
+    The answer is checked by re-solving the IK with the file's solver at the design.
+
+    Every level the IK achieves at the start is kept as an equality; the others are
+    dropped (the person takes the best posture). Exit code 1 when IPOPT fails or the
+    design does not keep the task (flagged); a re-solved IK that settles another posture
+    is said plainly, not flagged.
+
+    \b
+    Example:
+      casadi-posture design problems/standing_shelf_box.toml \\
+          --free 'tasks[2].target_m[2],tasks[3].target_m[2]=1.0:1.6'
+      casadi-posture design problems/holding_horizontal.toml \\
+          --free 'tasks[0].point_m[2],tasks[1].target_m[2]=-0.5:0.1' --out out/design
+    """
+    resolved = problem_from(problem, sets=sets)
+    bounds = parse_free(free, problem)
+    if out is not None:
+        api.check_out(out, force=force)
+    answer = design(resolved, bounds, objective, keep_levels)
+    if as_json:
+        emit_json(answer.to_dict())
+    else:
+        _echo(answer)
+    if out is not None:
+        files = _write(answer, out)
+        if not as_json:
+            click.echo("\nwrote: " + ", ".join(str(f) for f in files))
+    raise SystemExit(1 if answer.flags else 0)
+
+
+def _write(answer: Design, out: Path) -> list[Path]:
+    """design.json and the figure: the one-key sweep, or the group loads."""
+    out.mkdir(parents=True, exist_ok=True)
+    data = out / "design.json"
+    figure = out / "design.png"
+    if len(answer.free) == 1:
+        f = answer.free[0]
+        values = np.linspace(f.lower_m, f.upper_m, SWEEP_POINTS)
+        points = sweep(answer, values)
+        plot_sweep(answer, points, figure)
+        record = answer.to_dict() | {
+            "sweep": [
+                {"value_m": p.value_m, "task_kept": p.kept, **p.score.to_dict(answer.unit)}
+                for p in points
+            ]
+        }
+    else:
+        plot_loads(answer, figure)
+        record = answer.to_dict()
+    data.write_text(dumps(record) + "\n", encoding="utf-8")
+    return [data, figure]
+
+
+def _echo(answer: Design) -> None:
+    unit = "endurance (min)" if answer.objective == "endurance" else "capable (%)"
+    click.echo(
+        f"{answer.problem.path}: design for {answer.objective}; IPOPT {answer.status}, "
+        f"{answer.iterations} iterations, {answer.wall_time_s:.2f} s"
+    )
+    click.echo(f"levels kept: {'; '.join(answer.kept) or 'none'}")
+    if answer.dropped:
+        click.echo(f"levels dropped: {'; '.join(answer.dropped)}")
+    click.echo()
+    click.echo(
+        table(
+            ["free quantity", "lower (m)", "upper (m)", "start (m)", "best (m)", "at bound"],
+            [
+                [f.name, f.lower_m, f.upper_m, f.start_m, answer.best_m[j], answer.at_bound(j)]
+                for j, f in enumerate(answer.free)
+            ],
+            digits=4,
+        )
+    )
+    click.echo()
+    rows = [
+        ("start (IK)", answer.start),
+        ("best (NLP)", answer.best),
+        (f"best, IK re-solved ({answer.check_answer.ik.solver})", answer.check),
+    ]
+    click.echo(
+        table(
+            ["", unit, "limiting group", "region", "load (%MVC)"],
+            [[name, s.value, s.group, s.region, s.load_pct_mvc] for name, s in rows],
+            digits=3,
+        )
+    )
+    gain = "unlimited" if math.isinf(answer.gain) else f"{answer.gain:+.3f}"
+    units = "min" if answer.objective == "endurance" else "percentage points"
+    click.echo(f"\ngain: {gain} {units} (×{fmt(answer.ratio, 3)})")
+    tolerance = answer.to_dict()["check"]["tolerance"]
+    verdict = "agrees" if answer.agrees else "DIFFERS"
+    click.echo(f"re-solve check: {verdict} (tolerance {tolerance})")
+    for note in answer.notes:
+        click.echo(f"note: {note}")
+    for flag in answer.flags:
+        click.echo(f"FLAGGED: {flag}")

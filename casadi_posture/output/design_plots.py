@@ -1,0 +1,115 @@
+"""Figures of a design (``casadi-posture design --out``): the objective by the re-solved IK
+over one free quantity's bounds, or the loads of the groups at the start and the best
+design when several quantities are free."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from casadi_posture.design import Design, SweepPoint
+from casadi_posture.output.saving import save_figure
+
+#: Points of the one-key sweep over its bounds.
+SWEEP_POINTS = 15
+
+#: Groups shown in the multi-key bar chart (the most loaded at the start or the best).
+SHOWN_GROUPS = 12
+
+
+def _label(design: Design) -> str:
+    if design.objective == "endurance":
+        return "endurance of the limiting group (min)"
+    return f"share of {design.objective.removeprefix('capable-')}s capable (%)"
+
+
+def plot_sweep(design: Design, points: Sequence[SweepPoint], path: Path) -> Path:
+    """The objective by the re-solved IK against the one free quantity [m], with the start
+    and the NLP's best (its own value and the re-solved check) marked; an unlimited endurance
+    is drawn as a triangle on the top edge, a value where the IK does not keep the task
+    (out of reach) as a grey cross."""
+    free = design.free[0]
+    x = np.array([p.value_m for p in points])
+    y = np.array([p.score.value for p in points])
+    kept = np.array([p.kept for p in points])
+    finite = np.isfinite(y)
+    marks = [design.start.value, design.best.value, design.check.value]
+    top = max([*y[finite], *(v for v in marks if math.isfinite(v)), 1e-9]) * 1.15
+    fig, ax = plt.subplots(figsize=(7.0, 4.5), dpi=120)
+    good = kept & finite
+    ax.plot(x[good], y[good], "o-", color="tab:blue", lw=1.5, ms=4, label="IK re-solved")
+    if (kept & ~finite).any():
+        unlimited = x[kept & ~finite]
+        ax.plot(
+            unlimited,
+            np.full(unlimited.size, top),
+            "^",
+            color="tab:blue",
+            ms=8,
+            label="IK re-solved: unlimited",
+        )
+    if (~kept).any():
+        ax.plot(
+            x[~kept],
+            np.where(finite, y, top)[~kept],
+            "x",
+            color="0.5",
+            ms=8,
+            label="IK misses a kept level (task not held)",
+        )
+    for value, at, style, label in (
+        (design.start.value, free.start_m, ("s", "black"), "start (IK)"),
+        (design.best.value, design.best_m[0], ("*", "tab:red"), "best (NLP)"),
+        (design.check.value, design.best_m[0], ("D", "tab:orange"), "best, IK re-solved"),
+    ):
+        shown = value if math.isfinite(value) else top
+        ax.plot(
+            at,
+            shown,
+            style[0],
+            color=style[1],
+            ms=11 if style[0] == "*" else 8,
+            mfc="none" if style[0] == "D" else style[1],
+            mew=1.5,
+            label=label,
+            zorder=3,
+        )
+    ax.axvline(design.best_m[0], color="tab:red", lw=0.8, ls=":")
+    ax.set_ylim(0.0, top * 1.05)
+    pad = 0.02 * (free.upper_m - free.lower_m)
+    ax.set_xlim(free.lower_m - pad, free.upper_m + pad)
+    ax.set_xlabel(f"{free.name} (m)")
+    ax.set_ylabel(_label(design))
+    ax.set_title(f"{design.problem.path.name}: design for {design.objective}", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    return save_figure(fig, path)
+
+
+def plot_loads(design: Design, path: Path) -> Path:
+    """The load [%MVC] of the most loaded groups at the start (IK) and the best design
+    (NLP posture), with the load threshold T_0 when the law has one."""
+    names = [h.name for h in design.problem.body.half_joints]
+    start = design.start_answer.torques.load_pct_mvc
+    best = design.best_answer.torques.load_pct_mvc
+    order = np.argsort(-np.maximum(start, best))[:SHOWN_GROUPS]
+    order = [k for k in order if max(start[k], best[k]) > 0] or list(order[:1])
+    position = np.arange(len(order))
+    fig, ax = plt.subplots(figsize=(8.0, 4.5), dpi=120)
+    ax.bar(position - 0.2, start[order], 0.4, color="0.55", label="start (IK)")
+    ax.bar(position + 0.2, best[order], 0.4, color="tab:red", label="best (NLP)")
+    threshold = design.problem.fatigue.settings().get("load_threshold_pct_mvc")
+    if threshold is not None:
+        ax.axhline(float(threshold), color="black", lw=0.8, ls="--", label="T_0")
+    ax.set_xticks(position, [names[k] for k in order], rotation=40, ha="right", fontsize=8)
+    ax.set_ylabel("load (%MVC)")
+    ax.set_title(
+        f"{design.problem.path.name}: group loads, design for {design.objective}", fontsize=10
+    )
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_figure(fig, path)

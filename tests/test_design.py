@@ -1,0 +1,189 @@
+"""casadi-posture design: an analytic optimum, never worse than the start, the re-solve
+check, and every bad --free refused with exit 2."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from conftest import PROBLEMS
+
+from casadi_posture.cli import main
+from casadi_posture.design import design, independent_rows
+from casadi_posture.problem import load_problem, problem_from_data
+
+X_M = 0.40  # the wrist's fixed horizontal distance from the shoulder [m]
+LOAD_KG = 2.0
+
+ARM = {
+    "body": {
+        "model": "sagittal_arm",
+        "dofs": {
+            "shoulder_flexion": {"passive": {"model": "none"}},
+            "elbow_flexion": {"passive": {"model": "none"}},
+        },
+        "half_joints": {
+            "shoulder_flexors": {"strength_Nm": 40.0},
+            "shoulder_extensors": {"strength_Nm": 40.0},
+            "elbow_flexors": {"strength_Nm": 2000.0},
+            "elbow_extensors": {"strength_Nm": 2000.0},
+        },
+    },
+    "posture_deg": {"shoulder_flexion": 60.0, "elbow_flexion": 40.0},
+    "loads": [{"name": "weight", "at": "wrist", "mass_kg": LOAD_KG}],
+    "tasks": [
+        {
+            "name": "wrist",
+            "kind": "position",
+            "effector": "wrist",
+            "priority": 1,
+            "target_m": [X_M, 0.0, -0.10],
+        }
+    ],
+}
+Z_KEY = "tasks[0].target_m[2]"
+
+
+def _lengths(problem) -> tuple[float, float]:
+    """Upper arm and forearm-to-wrist lengths [m], read off the model's kinematics."""
+    body = problem.body
+    wrist = ca.Function("w", [body.q], [body.landmark("wrist")])
+    total = -float(wrist(np.zeros(2))[2])
+    # flexing the elbow 90° swings the wrist forward by the forearm length
+    forearm = float(wrist(np.radians([0.0, 90.0]))[0])
+    return total - forearm, forearm
+
+
+def test_analytic_optimum_of_a_shelf_height() -> None:
+    """The wrist at a fixed horizontal distance x from the shoulder, its height z free.
+
+    The elbow is so strong that its load stays below T_0 (never limiting), there are no
+    passive torques, and the shoulder flexors carry the arm, so the endurance is largest
+    where the shoulder torque is least. By virtual work, with the elbow at x_E and the
+    wrist at x (forearm and hand centres of mass on the elbow-wrist line at fractions c_f,
+    c_h of the forearm length L_f), the shoulder torque is
+
+        τ_s = g·[(m_u c_u + m_f (1 − c_f) + m_h (1 − c_h))·x_E + (m_f c_f + m_h c_h + m_L)·x],
+
+    whose x_E coefficient is positive for this body (≈ 1.67 kg, the hand's centre beyond
+    the wrist takes −0.11 kg off it). x_E = x − L_f·sin(θs + θe) ≥ x − L_f, least with the
+    forearm horizontal (θs + θe = 90°); the elbow then lies on the circle |E| = L_u at
+    x_E = x − L_f, below the shoulder (the branch above needs θe = 90° − θs < 0, outside the
+    elbow's [0, 150]° range): z* = −sqrt(L_u² − (x − L_f)²).
+    """
+    problem = problem_from_data(ARM, "arm.toml")
+    upper, forearm = _lengths(problem)
+    expected = -math.sqrt(upper**2 - (X_M - forearm) ** 2)
+    answer = design(problem, {Z_KEY: (-0.40, 0.05)})
+    assert answer.success, answer.status
+    assert answer.best_m[0] == pytest.approx(expected, abs=1e-4)
+    assert answer.best.group == "shoulder_flexors"
+    q = answer.best_answer.torques.q
+    assert math.degrees(q[0] + q[1]) == pytest.approx(90.0, abs=0.05)
+    # the optimum beats every other height the IK reaches
+    for z in (expected - 0.03, expected + 0.03):
+        other = design(load_other(z), {Z_KEY: (-0.40, 0.05)}).start
+        assert other.value < answer.best.value
+
+
+def load_other(z: float):
+    return problem_from_data(ARM, "arm.toml", {Z_KEY: z})
+
+
+def test_the_re_solve_check_agrees_when_every_level_binds() -> None:
+    """One position task on two DOFs: the posture is a function of the design, so the IK
+    re-solved at the best design is the NLP's posture."""
+    answer = design(problem_from_data(ARM, "arm.toml"), {Z_KEY: (-0.40, 0.05)})
+    assert answer.dropped == ()
+    assert answer.agrees
+    assert answer.check.value == pytest.approx(answer.best.value, rel=1e-6)
+    assert answer.posture_gap_deg < 1e-3
+    assert answer.kept_residual < 1e-8
+
+
+@pytest.mark.parametrize(
+    ("name", "free"),
+    [
+        ("holding_horizontal.toml", {"tasks[0].point_m[2],tasks[1].target_m[2]": (-0.5, 0.1)}),
+        ("holding_m45.toml", {"tasks[0].point_m[0],tasks[1].target_m[0]": (0.25, 0.45)}),
+        ("standing_shelf_box.toml", {"tasks[2].target_m[2],tasks[3].target_m[2]": (1.0, 1.6)}),
+    ],
+)
+def test_the_design_is_never_below_the_start(name: str, free: dict) -> None:
+    answer = design(load_problem(PROBLEMS / name), free)
+    assert answer.success, answer.status
+    assert answer.best.value >= answer.start.value
+    assert answer.kept_residual <= 1e-4
+    assert not answer.flags
+
+
+def test_capable_objective_raises_the_share() -> None:
+    problem = load_problem(PROBLEMS / "holding_horizontal.toml")
+    answer = design(
+        problem, {"tasks[0].point_m[2],tasks[1].target_m[2]": (-0.5, 0.1)}, "capable-female"
+    )
+    assert answer.success
+    assert answer.best.value >= answer.start.value
+    assert answer.agrees
+
+
+def test_independent_rows_drops_combinations() -> None:
+    rows = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0]])
+    assert independent_rows(rows) == [0, 3]
+
+
+SHELF = str(PROBLEMS / "holding_horizontal.toml")
+TIED = "tasks[0].point_m[2],tasks[1].target_m[2]"
+
+
+def test_cli_json_and_figure(tmp_path: Path) -> None:
+    out = tmp_path / "design"
+    result = CliRunner().invoke(
+        main, ["design", SHELF, "--free", f"{TIED}=-0.5:0.1", "--json", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["check"]["agrees"] is True
+    written = json.loads((out / "design.json").read_text())
+    assert len(written["sweep"]) == 15
+    held = [s["endurance_min"] for s in written["sweep"] if s["task_kept"]]
+    assert 0 < len(held) < 15  # the lowest heights are out of the arm's reach
+    assert data["best"]["endurance_min"] >= max(held) * (1 - 1e-9)  # no grid point beats it
+    assert (out / "design.png").stat().st_size > 0
+    again = CliRunner().invoke(
+        main, ["design", SHELF, "--free", f"{TIED}=-0.5:0.1", "--out", str(out)]
+    )
+    assert again.exit_code == 2 and "--force" in again.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--free", "tasks[9].point_m[2]=0:1"], "task index"),
+        (["--free", "tasks[0].effector=0:1"], "target coordinate"),
+        (["--free", "tasks[1].point_m[2]=0:1"], "target_m[k]"),
+        (["--free", "loads[0].mass_kg=1:2"], "landmark"),
+        (["--free", "tasks[0].point_m[2]=0.1:-0.5"], "LO < HI"),
+        (["--free", "tasks[0].point_m[2]=-0.5:inf"], "finite"),
+        (["--free", "tasks[0].point_m[2]=-50:10"], "unit slip"),
+        (["--free", "tasks[0].point_m[2]=0:0.1"], "hold the file's value"),
+        (["--free", "tasks[0].point_m[2]=-1:0", "--free", "tasks[0].point_m[2]=-1:1"], "once"),
+        (["--free", "tasks[0].point_m[2],tasks[1].target_m[0]=-1:1"], "share one value"),
+        (["--free", "tasks[0].point_m[2]"], "KEY=LO:HI"),
+        (
+            ["--free", "tasks[0].point_m[2]=-1:0", "--set", "fatigue.recovery_law=3cc_r"],
+            "capable",
+        ),
+    ],
+)
+def test_bad_free_exits_2(args: list[str], words: str) -> None:
+    result = CliRunner().invoke(main, ["design", SHELF, *args])
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
+    assert words in lines[0]
