@@ -155,3 +155,24 @@ def test_cli_shows_the_columns_and_the_sd_sources() -> None:
     data = json.loads(runner.invoke(main, ["torques", problem, "--json"]).output)
     assert {g["sd_status"] for g in data["capable"]["half_joints"]} == {"estimate"}
     assert data["capable"]["female"]["weakest_group"] == "shoulder_flexors"
+
+
+def test_whatif_rows_and_figure(tmp_path: Path) -> None:
+    """A static what-if writes each case's task share (that of the solved start posture) to
+    whatif.csv and draws it against the varied key; a simulated row has the same share."""
+    problem = PROBLEMS / "holding_horizontal.toml"
+    masses = [2.5, 7.5]
+    report = cp.whatif(problem, {"loads[0].mass_kg": masses}, tmp_path / "w", static=True)
+    rows = sorted(report.rows, key=lambda r: r["loads[0].mass_kg"])
+    for row, mass in zip(rows, masses, strict=True):
+        answer = cp.solve(cp.load(problem, {"loads[0].mass_kg": mass}))
+        for sex in SEXES:
+            assert row[f"capable_{sex}_pct"] == pytest.approx(answer.capable.share(sex), abs=1e-9)
+    assert rows[1]["capable_female_pct"] < rows[0]["capable_female_pct"]
+    header = (tmp_path / "w" / "whatif.csv").read_text().splitlines()[0].split(",")
+    assert {"capable_male_pct", "capable_female_pct"} <= set(header)
+    assert (tmp_path / "w" / "whatif_capable_pct_vs_loads_0_.mass_kg.png").exists()
+    run = cp.simulate(cp.load(problem, {"simulation.duration_s": 2.0}))
+    assert run.row()["capable_male_pct"] == pytest.approx(
+        cp.solve(cp.load(problem)).capable.share("male"), abs=1e-6
+    )

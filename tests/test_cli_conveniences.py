@@ -173,7 +173,8 @@ def test_force_starts_a_run_over_and_keeps_the_users_files(tmp_path: Path) -> No
     assert again.exit_code == 0, again.output
     assert (out / "notes.txt").read_text() == "mine"
     assert sorted(p.name for p in (out / "cases").iterdir()) == ["loads_0_.mass_kg=3"]
-    assert len(list(out.glob("whatif_*.png"))) == 4
+    # one figure per outcome of a simulated what-if (runs/whatif.py OUTCOMES)
+    assert len(list(out.glob("whatif_*.png"))) == 5
 
 
 def test_a_rerun_inside_a_batch_does_not_break_its_resume(tmp_path: Path) -> None:

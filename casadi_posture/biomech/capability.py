@@ -36,6 +36,8 @@ if TYPE_CHECKING:
 
 Sex = Literal["male", "female"]
 SEXES: tuple[Sex, Sex] = ("male", "female")
+#: How each sex is named in text and figures.
+PEOPLE: dict[Sex, str] = {"male": "men", "female": "women"}
 SdStatus = Literal["measured", "estimate"]
 
 #: A design convention, not a physiological limit: a task "most workers can do" when at least
@@ -108,7 +110,7 @@ class Capability:
     def task_line(self) -> str:
         """The task's share per sex and its weakest group, in one line."""
         parts = []
-        for sex, people in zip(SEXES, ("men", "women"), strict=True):
+        for sex, people in PEOPLE.items():
             weakest = self.weakest(sex)
             limit = "no group loaded" if weakest is None else f"weakest: {weakest.name}"
             parts.append(f"{self.share(sex):.1f} % of {people} ({limit})")
@@ -129,7 +131,7 @@ class Capability:
         """One line per sex whose share is below its design limit (a convention, not a flag:
         the answer stands, the task suits fewer people than designers usually aim at)."""
         out = []
-        for sex, people in zip(SEXES, ("men", "women"), strict=True):
+        for sex, people in PEOPLE.items():
             if self.below_design_limit(sex):
                 out.append(
                     f"{self.share(sex):.1f} % of {people} capable, below the "

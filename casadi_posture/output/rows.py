@@ -7,26 +7,34 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from casadi_posture.biomech.capability import SEXES, Capability
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.output.results import summary
 from casadi_posture.simulation import SimulationResult
-from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer
+from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, at_posture
 
 
 def static_row(answer: StaticAnswer) -> dict[str, Any]:
     """Whether level 1 was reached, each half-joint's load [%MVC] and endurance [min], the
-    groups over strength, the limiting group and the flags (one string)."""
+    groups over strength, the limiting group, the share of men and of women capable of the
+    task [%] and the flags (one string)."""
     row: dict[str, Any] = {}
     if answer.levels:
         top = answer.levels[0]
         row |= _reach(top.achieved, top.residual, top.unit)
     start = {g.name: (g.load_pct_mvc, g.endurance_s) for g in answer.groups}
     regions = _regions(answer.problem.body)
-    return row | _endurance(start, regions) | {"flags": "; ".join(answer.flags)}
+    return (
+        row
+        | _endurance(start, regions)
+        | _capable(answer.capable)
+        | {"flags": "; ".join(answer.flags)}
+    )
 
 
 def simulation_row(result: SimulationResult) -> dict[str, Any]:
-    """The start outcomes (as :func:`static_row`) and what the simulation found: when the
+    """The start outcomes (as :func:`static_row`; the shares capable at the first posture,
+    None when the run has no step) and what the simulation found: when the
     first group reached the fatigue threshold, which group was exhausted and when, the
     cycles, how long the task was held (a lower bound when the run ended with it held),
     the first recovery posture [deg] and its effector position [m], and the flags."""
@@ -42,6 +50,11 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     row: dict[str, Any] = (
         _reach(task["held_at_start"], task["level1_residual_at_start"], task["level1_unit"])
         | _endurance(start, _regions(result.problem.body))
+        | _capable(
+            at_posture(result.problem, result.timeline.q[0]).capable
+            if result.timeline.time.size
+            else None
+        )
         | {
             "simulated_s": report["simulated_s"],
             "stop": report["stop"],
@@ -72,6 +85,11 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     for axis, value in zip("xyz", position, strict=True):
         row[f"recovery_{result.effector}_{axis}_m"] = value
     return row
+
+
+def _capable(capable: Capability | None) -> dict[str, float | None]:
+    """The share of each sex capable of the task [%] (its weakest group's)."""
+    return {f"capable_{s}_pct": None if capable is None else capable.share(s) for s in SEXES}
 
 
 def _reach(reached: bool, residual: float | None, unit: str) -> dict[str, Any]:

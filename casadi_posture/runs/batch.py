@@ -62,6 +62,8 @@ LEADING = (
     "limiting_group_at_start",
     "limiting_endurance_at_start_min",
     "over_strength_at_start",
+    "capable_male_pct",
+    "capable_female_pct",
     "first_to_fatigue",
     "exhausted_group",
     "task_held_s",

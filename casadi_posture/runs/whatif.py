@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from casadi_posture.biomech.capability import DESIGN_LIMIT_PCT, PEOPLE, SEXES
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.problem import load_problem, read_problem_text, text_sha256
@@ -22,8 +23,13 @@ OUTCOMES = {
     "first_fatigue_s": "first group at the fatigue threshold (s)",
     "fatigue_recovery_cycles": "fatigue/recovery cycles",
     "limiting_endurance_at_start_min": "endurance of the limiting group at the start (min)",
+    "capable_pct": "capable of the task at the start (% of each sex)",
 }
-STATIC_OUTCOMES = ("limiting_endurance_at_start_min",)
+STATIC_OUTCOMES = ("limiting_endurance_at_start_min", "capable_pct")
+#: An outcome drawn as several columns of a row, one line each (named in the legend), and
+#: the design limit of each (a dashed line; biomech/capability.py).
+SERIES = {"capable_pct": {f"capable_{sex}_pct": PEOPLE[sex] for sex in SEXES}}
+LIMITS = {"capable_pct": {PEOPLE[sex]: DESIGN_LIMIT_PCT[sex] for sex in SEXES}}
 
 #: What a what-if writes beside a batch's files (``--force`` deletes them).
 WHATIF_OUTPUTS = ("whatif.csv", "whatif_*_vs_*.png")
@@ -146,9 +152,10 @@ def plot_outcomes(
     simulate: bool,
 ) -> list[Path]:
     """One figure per outcome and varied key: the outcome against that key's values, one
-    line per combination of the other keys. Flagged cases (level 1 not reached, over
-    strength, a solver failure) are crossed out in red; a task held to the end of the run
-    is a lower bound, drawn as an upward triangle."""
+    line per combination of the other keys (the share capable: one per sex too, with its
+    design limit dotted). Flagged cases (level 1 not reached, over strength, a solver
+    failure) are crossed out in red; a task held to the end of the run is a lower bound,
+    drawn as an upward triangle."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -170,13 +177,20 @@ def plot_outcomes(
                     for k, v in zip(others, g, strict=True)
                 ],
             )
-            for group in groups:
+            series = SERIES.get(outcome, {outcome: ""})
+            for (g, group), (s, (column, sex)) in itertools.product(
+                enumerate(groups), enumerate(series.items())
+            ):
                 members = [r for r in ran if tuple(str(_value(r, k)) for k in others) == group]
                 members.sort(key=lambda r: _position(r, key, values))
                 xs = np.array([_position(r, key, values) for r in members], dtype=float)
-                ys = np.array([_number(r.get(outcome)) for r in members])
-                name = ", ".join(f"{k}={v}" for k, v in zip(others, group, strict=True))
-                (line,) = ax.plot(xs, ys, "-o", label=name or None)
+                ys = np.array([_number(r.get(column)) for r in members])
+                name = ", ".join(
+                    [sex] * bool(sex) + [f"{k}={v}" for k, v in zip(others, group, strict=True)]
+                )
+                style = ("-o", "--s")[s % 2]  # one colour per combination, one style per sex
+                color = f"C{g % 10}" if len(series) > 1 else None
+                (line,) = ax.plot(xs, ys, style, color=color, label=name or None)
                 bound = np.array(
                     [
                         outcome == "task_held_s" and bool(r.get("task_held_is_lower_bound"))
@@ -190,6 +204,20 @@ def plot_outcomes(
                     ax.plot(xs[flagged], ys[flagged], "x", ms=11, mew=2, color="tab:red")
             if any(r.get("task_held_is_lower_bound") for r in ran) and outcome == "task_held_s":
                 ax.plot([], [], "^", mfc="none", color="0.3", label="held to the end (lower bound)")
+            for sex, limit in LIMITS.get(outcome, {}).items():
+                ax.axhline(limit, ls=":", lw=1.2, color="0.35")
+                ax.annotate(
+                    f"{sex}: design limit {limit:g} % (a convention)",
+                    (0.99, limit),
+                    xycoords=("axes fraction", "data"),
+                    xytext=(0, -9),
+                    textcoords="offset points",
+                    fontsize=7,
+                    color="0.35",
+                    ha="right",
+                )
+            if outcome in LIMITS:
+                ax.set_ylim(0.0, 102.0)
             if any(r["status"] == "flagged" for r in ran):
                 ax.plot([], [], "x", mew=2, color="tab:red", label="flagged: see whatif.csv")
             if not _numeric(values):
