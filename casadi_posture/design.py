@@ -37,6 +37,7 @@ import numpy as np
 from casadi_posture import static
 from casadi_posture.biomech.capability import SEXES, Sex, capability, population
 from casadi_posture.biomech.endurance import numeric
+from casadi_posture.body.loads import pack
 from casadi_posture.errors import CasadiPostureError, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
@@ -337,7 +338,13 @@ def design_nlp(
         _cache.nlps = OrderedDict()
     nlps: OrderedDict = _cache.nlps
     if key not in nlps:
-        ipopt = {"print_level": 0, "sb": "yes", "max_iter": MAX_ITERATIONS, "tol": 1e-8}
+        ipopt = {
+            "print_level": 0,
+            "sb": "yes",
+            "max_iter": MAX_ITERATIONS,
+            "tol": 1e-8,
+            "hessian_approximation": "limited-memory",
+        }
         options = {"print_time": False, "error_on_fail": False, "ipopt": ipopt}
         nlps[key] = ca.nlpsol("design", "ipopt", nlp, options)
         while len(nlps) > CACHED_STRUCTURES:
@@ -488,7 +495,7 @@ class Design:
 
     def overrides(self) -> dict[str, float]:
         """The best design as problem-file overrides {key: value [m]}."""
-        return {k: v for f, v in zip(self.free, self.best_m, strict=True) for k in f.keys}
+        return _overrides(self.free, self.best_m)
 
     def to_dict(self) -> dict[str, Any]:
         """Everything the command prints, as plain data (units in the key names; an
@@ -561,12 +568,17 @@ def design(
     free: Mapping[str, tuple[float, float]],
     objective: str = "endurance",
     keep_levels: int | None = None,
+    starts: int = 1,
 ) -> Design:
     """Choose the ``free`` quantities ({KEY or KEY1,KEY2: (LO, HI)} [m]) to maximise
     ``objective`` (one of :data:`OBJECTIVES`) by the design NLP, and check the answer by
     re-solving the IK with the file's solver at the best design. The levels the IK achieves
     at the start are kept as equalities, only the first ``keep_levels`` of them if given
-    (a posture task the start happens to achieve would otherwise fix the posture)."""
+    (a posture task the start happens to achieve would otherwise fix the posture).
+    ``starts`` > 1 also starts the NLP from the IK at ``starts − 1`` designs evenly spaced
+    on the diagonal of the bounds (a local method: the best answer is kept)."""
+    if starts < 1:
+        raise ProblemError(problem.path, "--starts", starts, "a number of starts ≥ 1")
     if objective not in OBJECTIVES:
         raise ProblemError(problem.path, "--objective", objective, f"one of {list(OBJECTIVES)}")
     hierarchy = problem.hierarchy()
@@ -602,7 +614,7 @@ def design(
             "nothing to maximise (the start is the design)"
         )
         return _finish(start, d0, q0, _Run("not run (unlimited at the start)"), notes, [])
-    params = np.concatenate([hierarchy.targets, problem.torque_model().default_loads])
+    params = np.concatenate([hierarchy.targets, pack(problem.loads)])
     nlp = design_nlp(problem, hierarchy, kept, quantities, objective, (q0, d0, params))
     if nlp.redundant:
         notes.append(
@@ -617,27 +629,49 @@ def design(
             "nothing to choose; drop a level with --keep-levels to let the body move"
         )
         return _finish(start, d0, q0, _Run("not run (no freedom)"), notes, [])
-    t0 = float(nlp.objective(q0, params))
+    lower = np.array([f.lower_m for f in quantities])
+    upper = np.array([f.upper_m for f in quantities])
+    points = [(q0, d0)]
+    for i in range(1, starts):
+        d_i = lower + (upper - lower) * i / starts
+        at = problem_from_data(problem.data, problem.path, _overrides(quantities, d_i))
+        other = static.solve(at)
+        if all(other.levels[k].achieved for k in kept):
+            points.append((other.torques.q, d_i))
+    if starts > 1:
+        notes.append(
+            f"{len(points)} starts (the file's design and {len(points) - 1} of {starts - 1} "
+            "evenly spaced designs whose IK keeps the task); the best answer is reported"
+        )
     body = problem.body
-    lbx = np.concatenate([body.lower, [f.lower_m for f in quantities], [-np.inf]])
-    ubx = np.concatenate([body.upper, [f.upper_m for f in quantities], [np.inf]])
+    lbx = np.concatenate([body.lower, lower, [-np.inf]])
+    ubx = np.concatenate([body.upper, upper, [np.inf]])
     lbg, ubg = nlp.constraint_bounds()
-    began = time.perf_counter()
-    out = nlp.solver(
-        x0=np.concatenate([q0, d0, [t0]]), p=params, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg
-    )
-    wall = time.perf_counter() - began
-    stats = nlp.solver.stats()
-    x = np.asarray(out["x"]).ravel()
+    best: tuple[float, _Run, np.ndarray] | None = None
+    for q_i, d_i in points:
+        t0 = float(nlp.objective(q_i, params))
+        began = time.perf_counter()
+        out = nlp.solver(
+            x0=np.concatenate([q_i, d_i, [t0]]), p=params, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg
+        )
+        wall = time.perf_counter() - began
+        stats = nlp.solver.stats()
+        run = _Run(str(stats["return_status"]), bool(stats["success"]), stats["iter_count"], wall)
+        x = np.asarray(out["x"]).ravel()
+        rank = (run.success, float(x[-1]))
+        if best is None or rank > (best[1].success, best[0]):
+            best = (float(x[-1]), run, x)
+    assert best is not None
+    _, run, x = best
     q = np.clip(x[: body.n], body.lower, body.upper)
-    d = np.clip(
-        x[body.n : body.n + len(quantities)],
-        [f.lower_m for f in quantities],
-        [f.upper_m for f in quantities],
-    )
-    run = _Run(str(stats["return_status"]), bool(stats["success"]), int(stats["iter_count"]), wall)
+    d = np.clip(x[body.n : body.n + len(quantities)], lower, upper)
     flags = [] if run.success else [f"IPOPT failed: {run.status}"]
     return _finish(start, d, q, run, notes, flags)
+
+
+def _overrides(quantities: Sequence[Free], d: Sequence[float]) -> dict[str, float]:
+    """Design values [m] as problem-file overrides {key: value}."""
+    return {k: float(v) for f, v in zip(quantities, d, strict=True) for k in f.keys}
 
 
 @dataclass(frozen=True)
@@ -656,8 +690,7 @@ def _finish(
     """The best design's answer at the NLP's posture ``q`` [rad] and values ``d`` [m], the
     re-solve check and their notes."""
     problem, objective, kept = start.problem, start.objective, start.kept
-    overrides = {k: float(v) for f, v in zip(start.free, d, strict=True) for k in f.keys}
-    at_best = problem_from_data(problem.data, problem.path, overrides)
+    at_best = problem_from_data(problem.data, problem.path, _overrides(start.free, d))
     best_answer = static.at_posture(at_best, q)
     best = score(best_answer, objective)
     residuals = at_best.hierarchy().residual_norms(q)

@@ -187,3 +187,11 @@ def test_bad_free_exits_2(args: list[str], words: str) -> None:
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: "), result.stderr
     assert words in lines[0]
+
+
+def test_more_starts_never_do_worse() -> None:
+    problem = load_problem(PROBLEMS / "holding_m45.toml")
+    free = {"tasks[0].point_m[0],tasks[1].target_m[0]": (0.25, 0.45)}
+    one, three = design(problem, free), design(problem, free, starts=3)
+    assert three.success and three.best.value >= one.best.value * (1 - 1e-9)
+    assert any("3 starts" in note for note in three.notes)

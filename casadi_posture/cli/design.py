@@ -41,6 +41,14 @@ from casadi_posture.output.report import fmt, table
     help="Keep only the first N priority levels as equalities [default: every level the "
     "IK achieves at the start].",
 )
+@click.option(
+    "--starts",
+    type=int,
+    default=1,
+    show_default=True,
+    help="Also start the NLP from the IK at N-1 designs evenly spaced within the bounds "
+    "(a local method; the best answer is kept).",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 @click.option(
     "--out",
@@ -55,6 +63,7 @@ def design_command(
     free: tuple[str, ...],
     objective: str,
     keep_levels: int | None,
+    starts: int,
     as_json: bool,
     out: Path | None,
     sets: tuple[str, ...],
@@ -81,7 +90,7 @@ def design_command(
     bounds = parse_free(free, problem)
     if out is not None:
         api.check_out(out, force=force)
-    answer = design(resolved, bounds, objective, keep_levels)
+    answer = design(resolved, bounds, objective, keep_levels, starts)
     if as_json:
         emit_json(answer.to_dict())
     else:
