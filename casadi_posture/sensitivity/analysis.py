@@ -12,6 +12,8 @@ the % change of the outcome per % change of the input.
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import casadi as ca
@@ -63,10 +65,11 @@ class Sensitivity:
             out.append(float(d * item.value / outcome) if ok else None)
         return out
 
-    def ranked(self) -> list[dict[str, object]]:
-        """Every input with the task's endurance derivative [min per unit] and elasticity,
-        and the limiting group's load derivative and elasticity, ranked by the endurance's
-        elasticity (largest magnitude first; inputs at 0 last, by their derivative)."""
+    def ranked(self, kinds: Sequence[str] = ()) -> list[dict[str, object]]:
+        """Every input (of ``kinds``, default all) with the task's endurance derivative
+        [min per unit] and elasticity, and the limiting group's load derivative and
+        elasticity, ranked by the endurance's elasticity (largest magnitude first; inputs at
+        0 last, by their derivative)."""
         if self.task_endurance_s is None:
             return []
         k = self.groups.index(self.limiting)
@@ -84,6 +87,7 @@ class Sensitivity:
                 "load_elasticity": e_load[j],
             }
             for j, item in enumerate(self.inputs)
+            if not kinds or item.kind in kinds
         ]
         return sorted(
             rows,
@@ -147,8 +151,6 @@ class Sensitivity:
 def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
     """Solve ``problem``'s IK as ``solve`` does and differentiate its outcomes with respect to
     every numeric input (the posture's change included, by the implicit function theorem)."""
-    import time
-
     start = time.perf_counter()
     answer = solve_static(problem, solver)
     hierarchy = problem.hierarchy() if problem.tasks else None

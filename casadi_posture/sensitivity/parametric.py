@@ -20,6 +20,7 @@ the reason in ``ParametricProblem.left_out``.
 from __future__ import annotations
 
 import math
+import typing
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Literal
@@ -38,6 +39,7 @@ from casadi_posture.ik.tasks import CentreOfMass, Gaze, JointReference, Line, Pl
 from casadi_posture.problem import Problem, problem_from_data
 
 Kind = Literal["load", "target", "posture", "body", "strength", "passive", "endurance"]
+KINDS: tuple[Kind, ...] = typing.get_args(Kind)
 
 #: Body inputs of a built-in model: problem-file key and unit.
 BODY_INPUTS = (
