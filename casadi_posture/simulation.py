@@ -7,6 +7,11 @@ not change, no constraint now or before, keeps the last certified posture); eval
 the torques; update every half-joint's fatigue over the step at the new posture's load
 (a load above 100 %MVC exhausts the group at once); apply the hysteresis; build the
 constraint for the next step. Every CasADi object is built once, before the loop.
+
+With a work–rest schedule (``[schedule]``) the hold alternates with rest: during a rest
+step no group carries a load, the IK is not solved, every group recovers at its unloaded
+rate and the hysteresis follows the fatigue levels; work resumes from the last held
+posture with the constraint as it then stands.
 """
 
 from __future__ import annotations
@@ -21,6 +26,8 @@ import numpy as np
 
 from casadi_posture import interrupt
 from casadi_posture.adjustment.constraint import ConstraintSettings, Event, FatigueConstraint
+from casadi_posture.adjustment.reduced_torque import Goal
+from casadi_posture.biomech.torques import Torques
 from casadi_posture.body.support import Support
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
@@ -30,9 +37,13 @@ from casadi_posture.ik.tasks import Line, Task
 from casadi_posture.problem import Problem
 from casadi_posture.static import STRENGTH_PCT_MVC
 
+#: What a step of the timeline was: the tasks held, or a rest with the load put down.
+Phase = Literal["hold", "rest"]
+
 #: Why a run ended: it ran its duration, a group was exhausted (or needed more than its
-#: strength), the top task could not be achieved at the start, or Ctrl-C.
-Stop = Literal["completed", "exhausted", "never_held", "interrupted"]
+#: strength), the top task could not be achieved at the start, Ctrl-C, or (asked for with
+#: ``stop_at_threshold``) a group reached the fatigue threshold.
+Stop = Literal["completed", "exhausted", "never_held", "interrupted", "fatigue_threshold"]
 
 
 @dataclass(frozen=True)
@@ -40,8 +51,11 @@ class Timeline:
     """One row per step: time [s], q [rad], effector [m], torques [N·m] per DOF; load [%MVC],
     fatigue level and hysteresis state per half-joint; the constraint owner (-1: none), the
     goal angle [rad] and Table 1 case; the residual of each priority level; the solver that
-    gave the posture; for a body on its feet, the centre of mass's floor projection [m] (with
-    the held loads) and its margin inside the support polygon [m] (body/support.py)."""
+    gave the posture ('' on a rest step); the phase of each step (``hold`` or ``rest``);
+    for a body on its feet, the centre of mass's floor projection [m] (with the held loads)
+    and its margin inside the support polygon [m] (body/support.py). A rest step repeats the
+    last held posture, its effector and centre of mass (the relaxed posture is not
+    modelled); its loads are 0 and its torques and residuals NaN (nothing is held)."""
 
     time: np.ndarray
     q: np.ndarray
@@ -58,6 +72,7 @@ class Timeline:
     case: list[str]
     residuals: np.ndarray
     solver: list[str]
+    phase: list[Phase]
     balance: tuple[np.ndarray, np.ndarray] | None = None
 
 
@@ -87,6 +102,7 @@ class SimulationResult:
     ik_fallbacks: int
     ik_iterations: int
     ik_reused: int
+    schedule: Schedule | None = None
 
     def __repr__(self) -> str:
         return (
@@ -109,6 +125,48 @@ def constraint_settings(problem: Problem) -> ConstraintSettings:
         alpha=f.alpha_rad_per_Nm2,
         keep_levels=f.keep_levels,
     )
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A work–rest schedule on the step grid of ``dt_s`` [s]: ``hold_steps`` steps of hold,
+    then ``rest_steps`` of rest, repeated. Each phase is its time in the file (``t_on_s``,
+    ``t_off_s``) rounded up to whole steps: ``n = ⌈t/dt⌉`` (at least one step of hold).
+
+    Step k (at k·dt) stands for the interval ((k−1)·dt, k·dt], whose load its fatigue update
+    uses; step 0 is the start, a hold. Step k ≥ 1 is a rest when
+    ``(k − 1) mod (hold_steps + rest_steps) ≥ hold_steps``: every cycle holds for
+    ``hold_steps·dt`` and rests for ``rest_steps·dt``."""
+
+    t_on_s: float
+    t_off_s: float
+    dt_s: float
+    hold_steps: int
+    rest_steps: int
+
+    @classmethod
+    def of(cls, problem: Problem) -> Schedule | None:
+        """The problem's ``[schedule]`` on its step grid (None: no schedule)."""
+        spec, dt = problem.spec.schedule, problem.spec.simulation.time_step_s
+        if spec is None:
+            return None
+        hold = max(1, whole_steps(spec.t_on_s, dt))
+        return cls(spec.t_on_s, spec.t_off_s, dt, hold, whole_steps(spec.t_off_s, dt))
+
+    @property
+    def period_steps(self) -> int:
+        """Steps of one work cycle (hold and rest)."""
+        return self.hold_steps + self.rest_steps
+
+    def resting(self, step: int) -> bool:
+        """Whether step ``step`` is a rest."""
+        return step > 0 and (step - 1) % self.period_steps >= self.hold_steps
+
+
+def whole_steps(seconds: float, dt_s: float) -> int:
+    """``⌈seconds/dt_s⌉``, the steps a phase of ``seconds`` [s] takes on the grid of ``dt_s``
+    [s] (a relative 1e-9 of rounding forgiven: 0.3 s of 0.1 s steps is 3 steps)."""
+    return math.ceil(seconds / dt_s - 1e-9)
 
 
 class _Recorder:
@@ -141,9 +199,11 @@ class _Solvers:
         return self._other
 
 
-def simulate(problem: Problem, solver: str | None = None) -> SimulationResult:
+def simulate(
+    problem: Problem, solver: str | None = None, *, stop_at_threshold: bool = False
+) -> SimulationResult:
     """Simulate the problem's hold for ``simulation.duration_s`` with ``solver`` (default:
-    the file's).
+    the file's), following its work–rest ``[schedule]`` if it has one.
 
     Stops early when a half-joint is exhausted (fatigue 1, or a load above its strength,
     which exhausts it at once), when the top priority level cannot be achieved at the
@@ -151,15 +211,17 @@ def simulate(problem: Problem, solver: str | None = None) -> SimulationResult:
     result then holds the steps run so far and ``stop`` says why. A step whose solver
     fails, stalls or leaves level 1 unachieved is solved again by the other solver from
     the same start (:func:`_solve_step`); the timeline records which solver gave each
-    posture.
+    posture. With ``stop_at_threshold`` the run also ends at the first step on which a group
+    reaches ``fatigue.fatigue_threshold`` (``stop == "fatigue_threshold"``), the moment the
+    fatigue-reducing constraint would engage.
     """
     if not problem.tasks:
         raise ProblemError(problem.path, "tasks", [], "at least one task to hold")
     with interrupt.deferred():
-        return _run(problem, solver)
+        return _run(problem, solver, stop_at_threshold)
 
 
-def _run(problem: Problem, solver: str | None) -> SimulationResult:
+def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> SimulationResult:
     start = time.perf_counter()
     spec, body = problem.spec, problem.body
     name = solver or spec.solver.name
@@ -182,6 +244,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
     top = hierarchy.level_names()[0]
 
     dt = spec.simulation.time_step_s
+    schedule = Schedule.of(problem)
     record = _Recorder()
     events: list[Event] = []
     state, q, torques = fatigue.initial_state(), problem.posture.copy(), None
@@ -194,6 +257,13 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
             events.append(Event(now, "interrupted", "", "Ctrl-C: the run stopped here"))
             stop = "interrupted"
             break
+        if schedule is not None and schedule.resting(step):
+            loads = np.zeros(len(names))
+            state = fatigue.step(state, loads, dt)
+            levels = fatigue.level(state, loads)
+            events += constraint.update(levels, now)
+            record.add(**_row(position, constraint, q, None, loads, levels, None, None))
+            continue
         was_blocked = constraint.blocked
         planned = constraint.hyperplane(q, torques) if torques is not None else None
         inequality, goal = planned if planned is not None else (None, None)
@@ -236,7 +306,8 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
                 )
             )
         levels[over] = 1.0
-        events += constraint.update(levels, now)
+        changes = constraint.update(levels, now)
+        events += changes
         if not result.achieved[0]:
             if step == 0:
                 detail = (
@@ -250,21 +321,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
             if held:
                 events.append(Event(now, "task_not_held", top, detail))
         held = result.achieved[0]
-        record.add(
-            q=q,
-            effector=np.asarray(position(q)).ravel(),
-            external=torques.external,
-            passive=torques.passive,
-            active=torques.active,
-            load=loads,
-            fatigue=levels,
-            fatigued=constraint.fatigued.copy(),
-            owner=-1 if constraint.owner is None else constraint.owner,
-            goal=math.nan if goal is None else goal.angle,
-            case="" if goal is None else goal.case,
-            residuals=result.residuals,
-            solver=result.solver,
-        )
+        record.add(**_row(position, constraint, q, torques, loads, levels, result, goal))
         if stop == "never_held":
             break
         if levels.max() >= 1.0:
@@ -279,6 +336,9 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
                 )
             )
             stop = "exhausted"
+            break
+        if stop_at_threshold and any(e.kind == "fatigue_threshold" for e in changes):
+            stop = "fatigue_threshold"
             break
     count = len(record.rows.get("q", []))
     effector_path = record.array("effector") if count else np.zeros((0, 3))
@@ -307,6 +367,7 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         list(record.rows.get("case", [])),
         _rows(record, "residuals", count, hierarchy.depth),
         list(record.rows.get("solver", [])),
+        list(record.rows.get("phase", [])),
         _balance(problem, _rows(record, "q", count, body.n)) if count else None,
     )
     return SimulationResult(
@@ -327,7 +388,41 @@ def _run(problem: Problem, solver: str | None) -> SimulationResult:
         fallbacks,
         iterations,
         reused,
+        schedule,
     )
+
+
+def _row(
+    position: ca.Function,
+    constraint: FatigueConstraint,
+    q: np.ndarray,
+    torques: Torques | None,
+    loads: np.ndarray,
+    levels: np.ndarray,
+    result: IKResult | None,
+    goal: Goal | None,
+) -> dict[str, object]:
+    """A timeline row: a hold step's (``torques`` and ``result`` given) or a rest step's
+    (None: the last held posture ``q`` [rad], NaN torques and residuals, no solver)."""
+    idle = np.full(len(q), math.nan)
+    return {
+        "q": q,
+        "effector": np.asarray(position(q)).ravel(),
+        "external": idle if torques is None else torques.external,
+        "passive": idle if torques is None else torques.passive,
+        "active": idle if torques is None else torques.active,
+        "load": loads,
+        "fatigue": levels,
+        "fatigued": constraint.fatigued.copy(),
+        "owner": -1 if constraint.owner is None else constraint.owner,
+        "goal": math.nan if goal is None else goal.angle,
+        "case": "" if goal is None else goal.case,
+        "residuals": np.full(constraint.hierarchy.depth, math.nan)
+        if result is None
+        else result.residuals,
+        "solver": "" if result is None else result.solver,
+        "phase": "rest" if result is None else "hold",
+    }
 
 
 def _solve_step(

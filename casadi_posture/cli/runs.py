@@ -27,6 +27,7 @@ from casadi_posture.output.animation import WRITERS, check_format
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
+from casadi_posture.output.schedule_plots import schedule_figures
 from casadi_posture.runs.whatif import MAX_CASES
 from casadi_posture.static import law
 
@@ -178,7 +179,7 @@ def _manifest(path: Path) -> dict[str, Any]:
 
 def _write(run: api.Simulation, out: Path, command: list[str]) -> list[Path]:
     files = write_results(run.result, out, command=command)
-    return files + plot_simulation(run.result, out)
+    return files + plot_simulation(run.result, out) + schedule_figures(run.result, out)
 
 
 def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
@@ -227,7 +228,8 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
     recoveries = report["recovery_postures"]
     for rec in recoveries[:SHOWN_RECOVERIES]:
         posture = ", ".join(f"{k} {v:.1f}°" for k, v in rec["posture_deg"].items())
-        click.echo(f"  recovered at {rec['time_s']:g} s: {posture}")
+        rest = " (during a rest: the last held posture)" if rec.get("phase") == "rest" else ""
+        click.echo(f"  recovered at {rec['time_s']:g} s{rest}: {posture}")
     if len(recoveries) > SHOWN_RECOVERIES:
         click.echo(f"  ... and {len(recoveries) - SHOWN_RECOVERIES} more in summary.json")
     for flag in report["flags"]:
@@ -277,6 +279,13 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
     else:
         lines.append(f"task held ≥ {task['held_s']:g} s (to the end of the run)")
     lines.append(f"fatigue/recovery cycles: {report['fatigue_recovery_cycles']}")
+    if report.get("schedule"):
+        s = report["schedule"]
+        lines.append(
+            f"work-rest schedule: hold {s['hold_s']:g} s, rest {s['rest_s']:g} s; "
+            f"{s['work_cycles']} work cycles ({s['work_cycles_completed']} held to their end), "
+            f"{s['time_holding_s']:g} s holding, {s['time_resting_s']:g} s resting"
+        )
     return lines
 
 

@@ -115,18 +115,43 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "over_strength_events": sum(e.kind == "over_strength" for e in result.events),
         "constraint_blocked_events": sum(e.kind == "constraint_blocked" for e in result.events),
         "keep_levels": result.settings.keep_levels,
+        "schedule": schedule_summary(result),
         "balance_margin_min_m": None
         if tl.balance is None or not tl.balance[1].size
         else float(tl.balance[1].min()),
         "flags": flags(result),
         "solver_statistics": {
             "steps": int(tl.time.size),
-            "steps_by_solver": dict(Counter(tl.solver)),
+            "steps_by_solver": dict(Counter(s for s in tl.solver if s)),
             "ik_iterations": result.ik_iterations,
             "ik_failures": result.ik_failures,
             "ik_fallbacks": result.ik_fallbacks,
             "ik_reused": result.ik_reused,
         },
+    }
+
+
+def schedule_summary(result: SimulationResult) -> dict[str, Any] | None:
+    """The work–rest schedule and what the run did of it (None: no schedule): the file's
+    times [s], the phases on the step grid (``hold_s``, ``rest_s``: ⌈t/dt⌉·dt), the work
+    cycles begun and those whose hold ran its whole ``hold_s``, and the time spent holding
+    and resting [s]."""
+    schedule, tl = result.schedule, result.timeline
+    if schedule is None:
+        return None
+    holding = np.array([p == "hold" for p in tl.phase[1:]], dtype=bool)  # step k: interval k
+    cycle = np.arange(holding.size) // schedule.period_steps
+    held = np.bincount(cycle[holding], minlength=1)  # hold steps of each cycle
+    begun = max(-(-holding.size // schedule.period_steps), min(tl.time.size, 1))
+    return {
+        "t_on_s": schedule.t_on_s,
+        "t_off_s": schedule.t_off_s,
+        "hold_s": schedule.hold_steps * schedule.dt_s,
+        "rest_s": schedule.rest_steps * schedule.dt_s,
+        "work_cycles": begun,
+        "work_cycles_completed": int(np.sum(held == schedule.hold_steps)),
+        "time_holding_s": float(holding.sum() * schedule.dt_s),
+        "time_resting_s": float((~holding).sum() * schedule.dt_s),
     }
 
 
@@ -202,6 +227,7 @@ def _recoveries(result: SimulationResult) -> list[dict[str, Any]]:
                 "posture_deg": dict(zip(names, np.degrees(tl.q[step]).tolist(), strict=True)),
                 "effector_m": tl.effector[step].tolist(),
                 "along_line_m": None if tl.along_line is None else float(tl.along_line[step]),
+                "phase": tl.phase[step],
             }
         )
     return out
@@ -309,7 +335,7 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     (None): no constraint owner, goal or case on that step."""
     tl, body = result.timeline, result.problem.body
     halves = [h.name for h in body.half_joints]
-    columns: dict[str, list[Any]] = {"time_s": tl.time.tolist()}
+    columns: dict[str, list[Any]] = {"time_s": tl.time.tolist(), "phase": list(tl.phase)}
     for i, dof in enumerate(body.dof_names):
         columns[f"{dof}_deg"] = np.degrees(tl.q[:, i]).tolist()
     for a, axis in enumerate("xyz"):
@@ -318,7 +344,7 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
         columns[f"{result.effector}_along_line_m"] = tl.along_line.tolist()
     for kind, values in (("active", tl.active), ("passive", tl.passive), ("external", tl.external)):
         for i, dof in enumerate(body.dof_names):
-            columns[f"tau_{kind}_{dof}_Nm"] = values[:, i].tolist()
+            columns[f"tau_{kind}_{dof}_Nm"] = _numbers(values[:, i])
     for k, half in enumerate(halves):
         columns[f"load_{half}_pct_mvc"] = tl.load[:, k].tolist()
     for k, half in enumerate(halves):
@@ -329,14 +355,19 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     columns["goal_angle_deg"] = [None if math.isnan(g) else math.degrees(g) for g in tl.goal]
     columns["goal_case"] = [c or None for c in tl.case]
     for k, unit in enumerate(result.level_units):
-        columns[f"residual_level{k + 1}_{unit.replace(', ', '_')}"] = tl.residuals[:, k].tolist()
-    columns["ik_solver"] = list(tl.solver)
+        columns[f"residual_level{k + 1}_{unit.replace(', ', '_')}"] = _numbers(tl.residuals[:, k])
+    columns["ik_solver"] = [s or None for s in tl.solver]
     if tl.balance is not None:
         ground, margins = tl.balance
         columns["com_x_m"] = ground[:, 0].tolist()
         columns["com_y_m"] = ground[:, 1].tolist()
         columns["balance_margin_m"] = margins.tolist()
     return columns
+
+
+def _numbers(values: np.ndarray) -> list[float | None]:
+    """A column of floats with None (an empty cell) for NaN: not computed on a rest step."""
+    return [None if math.isnan(v) else v for v in values.tolist()]
 
 
 def event_columns(result: SimulationResult) -> dict[str, list[Any]]:

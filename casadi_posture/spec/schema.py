@@ -468,6 +468,15 @@ class SimulationSpec(Strict):
         return math.floor(self.duration_s / self.time_step_s + 1e-9) + 1
 
 
+class ScheduleSpec(Strict):
+    """A work–rest schedule: hold the tasks for ``t_on_s``, put the load down and rest for
+    ``t_off_s``, repeated from the start of the run. Each phase lasts its time rounded up
+    to a whole number of ``simulation.time_step_s`` (docs/problem-files.md)."""
+
+    t_on_s: Annotated[float, Field(gt=0, le=MAX_DURATION_S)]
+    t_off_s: Annotated[float, _between(0.0, MAX_DURATION_S)]
+
+
 class SolverSpec(Strict):
     """IK solver and its options; an option left out takes the solver's own default."""
 
@@ -494,4 +503,5 @@ class ProblemSpec(Strict):
     tasks: list[Task] = []
     fatigue: FatigueSpec = FatigueSpec()
     simulation: SimulationSpec = SimulationSpec()
+    schedule: ScheduleSpec | None = None
     solver: SolverSpec = SolverSpec()

@@ -1,0 +1,207 @@
+"""Commands on work–rest schedules: duty-cycle."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from casadi_posture import api, interrupt
+from casadi_posture.cli.common import (
+    FORCE_OPTION,
+    INTERRUPTED,
+    SET_OPTION,
+    SOLVER_OPTION,
+    emit_json,
+    main,
+    problem_from,
+)
+from casadi_posture.errors import ProblemError
+from casadi_posture.output.report import table
+from casadi_posture.runs.duty_cycle import (
+    DutyCycle,
+    check_seconds,
+    duty_cycles,
+    table_columns,
+    write_duty_cycles,
+)
+
+
+def _seconds_list(text: str, problem: str) -> list[float]:
+    """``--t-off 30`` or ``--t-off 0,30,60`` as rest times [s], each finite and ≥ 0."""
+    values = []
+    for part in text.split(","):
+        try:
+            value = float(part)
+        except ValueError:
+            raise ProblemError(
+                problem, "--t-off", text, "seconds ≥ 0, or a list: 0,30,60"
+            ) from None
+        values.append(check_seconds(value, "--t-off", problem, positive=False))
+    if len(set(values)) != len(values):
+        raise ProblemError(problem, "--t-off", text, "each rest time once")
+    return values
+
+
+@main.command("duty-cycle")
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--t-off",
+    "t_off",
+    required=True,
+    metavar="SECONDS[,SECONDS...]",
+    help="Rest per cycle in s (the load put down); a list, e.g. 0,30,60, tabulates the "
+    "sustainable hold against the rest.",
+)
+@click.option(
+    "--horizon",
+    type=float,
+    default=None,
+    help="Simulated time in s over which the threshold must not be reached "
+    "[default: the file's simulation.duration_s].",
+)
+@click.option(
+    "--tolerance",
+    type=float,
+    default=None,
+    help="Width in s of the bracket the bisection stops at [default: 5 s, at least one time step].",
+)
+@SOLVER_OPTION
+@SET_OPTION
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Also write duty_cycle.json, duty_cycle.csv and figures into this folder.",
+)
+@FORCE_OPTION
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+def duty_cycle(
+    problem: str,
+    t_off: str,
+    horizon: float | None,
+    tolerance: float | None,
+    solver: str | None,
+    sets: tuple[str, ...],
+    out: Path | None,
+    force: bool,
+    as_json: bool,
+) -> None:
+    """The sustainable duty cycle: with T_OFF seconds of rest per cycle (the load put
+    down), the longest hold t_on per cycle with which no muscle group reaches the fatigue
+    threshold (fatigue.fatigue_threshold: where the fatigue-reducing constraint would
+    engage) within the horizon, found by bisection over simulations of the schedule.
+
+    Prints every simulation, the bracket (the longest hold found below the threshold and
+    the shortest found to reach it), the duty cycle t_on/(t_on + t_off) in %, the number
+    of simulations and the wall time. Exit code 1 when the answer cannot be used as it is
+    (the task never held, IK failures), 130 on Ctrl-C (the bracket found so far is
+    printed).
+
+    \b
+    Example:
+      casadi-posture duty-cycle problems/holding_horizontal.toml --t-off 30
+      casadi-posture duty-cycle problems/holding_horizontal.toml --t-off 0,15,30,60,120 \\
+          --horizon 1800 --out out/duty-cycle
+    """
+    rests = _seconds_list(t_off, problem)
+    for key, value in (("--horizon", horizon), ("--tolerance", tolerance)):
+        if value is not None:
+            check_seconds(value, key, problem, positive=True)
+    with interrupt.deferred():
+        resolved = problem_from(problem, sets=sets)
+        resolved.hierarchy()  # a problem without tasks is refused, naming its file
+        if out is not None:
+            api.check_out(out, force=force)
+        cycles = duty_cycles(
+            resolved, rests, horizon_s=horizon, tolerance_s=tolerance, solver=solver
+        )
+        files = write_duty_cycles(cycles, out) if out is not None else []
+    if as_json:
+        emit_json([c.summary() for c in cycles])
+    else:
+        _report(cycles, files)
+    if any(c.verdict == "interrupted" for c in cycles) or interrupt.requested():
+        raise SystemExit(INTERRUPTED)
+    raise SystemExit(1 if any(c.flags for c in cycles) else 0)
+
+
+def _report(cycles: list[DutyCycle], files: list[Path]) -> None:
+    """The trials of each search and its answer in words; a table for several rests."""
+    for cycle in cycles:
+        click.echo(
+            f"{cycle.problem}: rest {cycle.rest_s:g} s per cycle, horizon {cycle.horizon_s:g} s, "
+            f"tolerance {cycle.tolerance_s:g} s (time step {cycle.time_step_s:g} s); threshold: "
+            f"a group's fatigue at {cycle.fatigue_threshold:g} (fatigue.fatigue_threshold)"
+        )
+        click.echo(
+            table(
+                ["t_on (s)", "reaches the threshold", "at (s)", "group", "max fatigue", "wall (s)"],
+                [
+                    [
+                        t.t_on_s,
+                        "interrupted" if t.reached is None else "yes" if t.reached else "no",
+                        t.threshold_s,
+                        t.half_joint or "-",
+                        t.max_fatigue,
+                        t.wall_time_s,
+                    ]
+                    for t in cycle.trials
+                ],
+                digits=2,
+            )
+        )
+        for line in answer_lines(cycle):
+            click.echo(line)
+        click.echo()
+    if len(cycles) > 1:
+        columns = table_columns(cycles)
+        shown = {
+            "rest_s": "rest (s)",
+            "verdict": "verdict",
+            "sustainable_t_on_s": "sustainable t_on (s)",
+            "failing_t_on_s": "failing t_on (s)",
+            "duty_cycle_pct": "duty cycle (%)",
+        }
+        rows = [list(row) for row in zip(*(columns[k] for k in shown), strict=True)]
+        click.echo(table(list(shown.values()), rows, digits=1))
+    if files:
+        click.echo("files: " + ", ".join(str(f) for f in files))
+
+
+def answer_lines(cycle: DutyCycle) -> list[str]:
+    """A search's answer in words: the bracket and duty cycle, or why there is none."""
+    rest, verdict = cycle.rest_s, cycle.verdict
+    failing = next((t for t in cycle.trials if t.t_on_s == cycle.failing_t_on_s), None)
+    where = f" ({failing.half_joint} at {failing.threshold_s:g} s)" if failing else ""
+    if verdict == "continuous":
+        lines = [
+            f"sustainable continuously: the hold never reaches the threshold within "
+            f"{cycle.horizon_s:g} s (duty cycle 100 %)"
+        ]
+    elif verdict == "none":
+        lines = [
+            f"no duty cycle works: even {cycle.failing_t_on_s:g} s of hold per cycle (one "
+            f"step) with {rest:g} s of rest reaches the threshold{where}"
+        ]
+    elif verdict == "never_held":
+        lines = ["task never held: level 1 not achieved at the start"]
+    elif verdict == "interrupted":
+        lines = [
+            "interrupted: bracket so far "
+            f"[{_or_dash(cycle.sustainable_t_on_s)}, {_or_dash(cycle.failing_t_on_s)}] s"
+        ]
+    else:
+        ok = cycle.sustainable_t_on_s
+        lines = [
+            f"sustainable: t_on ≤ {ok:g} s of hold per cycle with {rest:g} s of rest stays "
+            f"below the threshold for {cycle.horizon_s:g} s; {cycle.failing_t_on_s:g} s "
+            f"reaches it{where}",
+            f"duty cycle: {cycle.duty_cycle_pct:.1f} % ({ok:g} s of every {ok + rest:g} s)",
+        ]
+    lines.append(f"{len(cycle.trials)} simulations, {cycle.wall_time_s:.2f} s wall")
+    return lines + [f"FLAGGED: {flag}" for flag in cycle.flags]
+
+
+def _or_dash(value: float | None) -> str:
+    return "-" if value is None else f"{value:g}"
