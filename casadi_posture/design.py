@@ -38,7 +38,7 @@ from casadi_posture import static
 from casadi_posture.biomech.capability import SEXES, Sex, capability, population
 from casadi_posture.biomech.endurance import numeric
 from casadi_posture.body.loads import pack
-from casadi_posture.errors import CasadiPostureError, ProblemError
+from casadi_posture.errors import MISSING, CasadiPostureError, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.problem import Problem, problem_from_data
@@ -126,7 +126,7 @@ def free_quantities(
     and mapped to its index in ``hierarchy.p``; tied keys must share their file value."""
     path = problem.path
     if not free:
-        raise ProblemError(path, "--free", None, "at least one KEY=LO:HI to design")
+        raise ProblemError(path, "--free", MISSING, "at least one KEY=LO:HI to design")
     out, seen = [], set()
     for names, (lo, hi) in free.items():
         keys = tuple(names.split(","))
@@ -163,7 +163,7 @@ def _value(problem: Problem, key: str) -> float:
             "a task target: a load hangs on a body landmark (loads[i].at), so its position "
             "is not a free quantity; free the target of the task that holds it"
         )
-        raise ProblemError(path, f"--free {key}", None, expected)
+        raise ProblemError(path, f"--free {key}", MISSING, expected)
     shape = [type(p) for p in parts]
     if shape != [str, int, str, int] or parts[0] != "tasks":
         raise ProblemError(path, "--free", key, _EXPECTED_KEY)
@@ -182,7 +182,7 @@ def _value(problem: Problem, key: str) -> float:
     point = getattr(task, field)
     if point is None:
         expected = "a com task with a target_m (without one the target follows the posture)"
-        raise ProblemError(path, f"--free {key}", None, expected)
+        raise ProblemError(path, f"--free {key}", MISSING, expected)
     if isinstance(task, ComTask) and "xyz"[k] not in task.axes:
         expected = f"an axis the com task constrains ({task.axes})"
         raise ProblemError(path, f"--free {key}", "xyz"[k], expected)
