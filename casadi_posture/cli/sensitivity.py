@@ -108,7 +108,7 @@ def _echo(result: Sensitivity, problem: str, top: int, kinds: tuple[str, ...]) -
         else "posture held fixed"
     )
     click.echo(
-        f"{problem}: {len(result.inputs)} inputs, {how}, {result.wall_time_s:.2f} s\n"
+        f"{problem}: {len(result.inputs)} inputs, {how}\n"
         f"{_title(result).replace(chr(10), ' ')}\n"
     )
     ranked = result.ranked(kinds)
