@@ -176,3 +176,23 @@ def test_whatif_rows_and_figure(tmp_path: Path) -> None:
     assert run.row()["capable_male_pct"] == pytest.approx(
         cp.solve(cp.load(problem)).capable.share("male"), abs=1e-6
     )
+
+
+def test_edges_carries_nothing_and_no_strength() -> None:
+    """τ = 0 counts as 100 % (not Φ(μ/σ) < 100); a population mean that is not positive (a
+    regression outside its range) gives 0 % for any load, never a NaN."""
+    from casadi_posture.biomech.capability import PopulationStrength, capability
+
+    weak = PopulationStrength(
+        "g",
+        {"male": 10.0, "female": -2.0},
+        {"male": 2.8, "female": -0.56},
+        "test",
+        "test",
+        "estimate",
+    )
+    result = capability([weak, weak], [0.0, 5.0])
+    assert result.groups[0].capable_pct == {"male": 100.0, "female": 100.0}
+    assert result.groups[1].capable_pct["male"] == pytest.approx(_above(10.0, 2.8, 5.0))
+    assert result.groups[1].capable_pct["female"] == 0.0
+    assert result.share("female") == 0.0 and result.weakest("female").required == 5.0
