@@ -462,6 +462,7 @@ def whatif(
     )
     keys = [k for k, _ in parsed]
     headers = [*keys, "reached", "limiting group at start", "region", "endurance at start (min)"]
+    headers += ["capable men (%)", "capable women (%)"]
     if not static:
         headers += ["first at threshold (s)", "exhausted group", "cycles", "task held (s)"]
     headers.append("flags")
@@ -485,6 +486,8 @@ def whatif(
             row["limiting_group_at_start"] or "none",
             row["limiting_region_at_start"] or "-",
             _unlimited(row["limiting_endurance_at_start_min"]),
+            row["capable_male_pct"],
+            row["capable_female_pct"],
         ]
         if not static:
             line += [
