@@ -35,7 +35,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture import static
-from casadi_posture.biomech.capability import SEXES, Sex, capability, population
+from casadi_posture.biomech.capability import SEXES, Sex, capability
 from casadi_posture.biomech.endurance import numeric
 from casadi_posture.body.loads import pack
 from casadi_posture.errors import MISSING, CasadiPostureError, ProblemError
@@ -250,7 +250,8 @@ def score(answer: static.StaticAnswer, objective: str) -> Score:
         )
     sex = _sex(objective)
     result = capability(
-        population(problem, answer.torques.strength), answer.torques.half_joint_torque
+        static.population_strength(problem, answer.torques.strength),
+        answer.torques.half_joint_torque,
     )
     weakest = result.weakest(sex)
     if weakest is None:
@@ -388,11 +389,11 @@ def _measures(problem: Problem, torques: Any, objective: str) -> tuple[ca.SX, ca
         ]
         return ca.vertcat(*measure), ca.vertcat(*load) - 100.0
     sex = _sex(objective)
-    # population() is affine in the strength it is given (a group the file sets takes the
+    # population_strength() is affine in the strength it is given (a group the file sets takes the
     # problem's strength as its mean, SD = CV × mean; the others are constant): its value at
     # strengths 0 and 1 gives each group's mean and SD as expressions of st_g(q).
-    zero = population(problem, np.zeros(len(strength)))
-    one = population(problem, np.ones(len(strength)))
+    zero = static.population_strength(problem, np.zeros(len(strength)))
+    one = static.population_strength(problem, np.ones(len(strength)))
     measure = []
     for a, s, g0, g1 in zip(active, strength, zero, one, strict=True):
         mean = g0.mean[sex] + (g1.mean[sex] - g0.mean[sex]) * s

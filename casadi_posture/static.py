@@ -18,7 +18,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
-from casadi_posture.biomech.capability import Capability, capability, population
+from casadi_posture.biomech.capability import (
+    Capability,
+    PopulationStrength,
+    capability,
+    population,
+)
 from casadi_posture.biomech.torques import Torques
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
@@ -258,7 +263,7 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     """Torques and loads at ``q`` [rad] (default: the problem's ``posture_deg``)."""
     torques = problem.torque_model().evaluate(problem.posture if q is None else q)
     groups = tuple(group_loads(problem, torques))
-    capable = capability(population(problem, torques.strength), torques.half_joint_torque)
+    capable = capability(population_strength(problem, torques.strength), torques.half_joint_torque)
     flags = tuple(_over_strength(groups))
     return StaticAnswer(problem, torques, groups, None, (), flags, capable)
 
@@ -303,3 +308,18 @@ def _over_strength(groups: Sequence[GroupLoad]) -> list[str]:
         return []
     needs = ", ".join(f"{g.name} needs {g.load_pct_mvc:.2f} %MVC" for g in over)
     return [f"over strength: {needs}; this posture cannot be held"]
+
+
+def population_strength(
+    problem: Problem, strength: Sequence[float]
+) -> tuple[PopulationStrength, ...]:
+    """The population strength of every half-joint of ``problem`` (``body.half_joints`` order)
+    at its body's stature, mass and age; ``strength`` [N·m] the problem's own at the posture
+    considered, the mean of a group whose strength the file sets."""
+    own = {
+        p.name.removeprefix("strength."): p.source
+        for p in problem.parameters
+        if p.name.startswith("strength.") and p.status == "user"
+    }
+    groups = [h.name for h in problem.body.half_joints]
+    return population(problem.spec.body, groups, own, strength)

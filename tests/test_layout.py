@@ -25,6 +25,8 @@ FLOORS = {
     "adjustment": 6,
     "simulation": 7,
     "description": 7,
+    "sensitivity": 7,
+    "design": 7,
     "output": 8,
     "runs": 9,
     "api": 10,

@@ -20,9 +20,9 @@ estimate ``strength.population_cv`` (``strength.toml``).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
@@ -30,9 +30,7 @@ import numpy as np
 from casadi_posture.biomech.strength import anderson_row, default_strength
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import data_name
-
-if TYPE_CHECKING:
-    from casadi_posture.problem import Problem
+from casadi_posture.spec.schema import BodySpec
 
 Sex = Literal["male", "female"]
 SEXES: tuple[Sex, Sex] = ("male", "female")
@@ -162,35 +160,39 @@ def population_cv() -> parameters.Parameter:
     return parameters.load("strength")["strength.population_cv"]
 
 
-def population(problem: Problem, strength: Sequence[float]) -> tuple[PopulationStrength, ...]:
-    """The population strength of every half-joint of ``problem`` (``body.half_joints``
-    order). ``strength`` [N·m] is the problem's own strength of each group at the posture
-    considered (``Torques.strength``): the mean of a group whose strength the file sets."""
-    b = problem.spec.body
-    set_by_file = {
-        p.name.removeprefix("strength."): p.source
-        for p in problem.parameters
-        if p.name.startswith("strength.") and p.status == "user"
-    }
+def population(
+    body: BodySpec,
+    groups: Sequence[str],
+    own: Mapping[str, str],
+    strength: Sequence[float],
+) -> tuple[PopulationStrength, ...]:
+    """The population strength of every half-joint in ``groups`` of a body described by
+    ``body`` (sex ignored: both sexes at its stature, mass and age). ``strength`` [N·m] is the
+    problem's own strength of each group at the posture considered (``Torques.strength``): the
+    mean of a group whose strength the file sets (``own``: group -> where it is set)."""
     out = []
-    for k, half in enumerate(problem.body.half_joints):
-        cv, sd_source, sd_status = _spread(data_name(half.name), b.age_years)
-        if half.name in set_by_file:
+    for k, name in enumerate(groups):
+        cv, sd_source, sd_status = _spread(data_name(name), body.age_years)
+        if name in own:
             mean = dict.fromkeys(SEXES, float(strength[k]))
-            source = f"the problem's own strength, for both sexes ({set_by_file[half.name]})"
+            source = f"the problem's own strength, for both sexes ({own[name]})"
         else:
             mean = {
                 sex: default_strength(
-                    half.name, sex=sex, stature=b.stature_m, body_mass=b.mass_kg, age=b.age_years
+                    name,
+                    sex=sex,
+                    stature=body.stature_m,
+                    body_mass=body.mass_kg,
+                    age=body.age_years,
                 )[0].value
                 for sex in SEXES
             }
             source = (
-                f"shipped default strength of each sex at {b.stature_m:g} m, {b.mass_kg:g} kg, "
-                f"{b.age_years:g} y (strength.toml)"
+                f"shipped default strength of each sex at {body.stature_m:g} m, "
+                f"{body.mass_kg:g} kg, {body.age_years:g} y (strength.toml)"
             )
         sd = {sex: cv[sex] * mean[sex] for sex in SEXES}
-        out.append(PopulationStrength(half.name, mean, sd, source, sd_source, sd_status))
+        out.append(PopulationStrength(name, mean, sd, source, sd_source, sd_status))
     return tuple(out)
 
 
