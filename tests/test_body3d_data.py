@@ -498,8 +498,9 @@ def test_the_two_old_dofs_are_unchanged(dof: str) -> None:
     problem = load_problem(PROBLEMS / "holding_m45.toml")
     angles = sorted(OLD_PASSIVE[dof])
     value, slope = problem.passive[dof].numeric(np.radians(angles))
-    assert list(value) == [OLD_PASSIVE[dof][a][0] for a in angles]
-    assert list(slope) == [OLD_PASSIVE[dof][a][1] for a in angles]
+    # unchanged to the last bits: numpy's exp may differ by an ulp between builds
+    assert list(value) == pytest.approx([OLD_PASSIVE[dof][a][0] for a in angles], rel=1e-15)
+    assert list(slope) == pytest.approx([OLD_PASSIVE[dof][a][1] for a in angles], rel=1e-15)
     records = {r.name: r for r in problem.parameters}
     for key, *expected in OLD_RECORDS[dof]:
         record = records[f"joints.{dof}.passive.{key}"]
