@@ -91,8 +91,10 @@ def sensitivity_command(
 
 
 def _title(result: Sensitivity) -> str:
+    if result.task_endurance_s is None and result.flags:
+        return "the task's endurance is not differentiated: see the flags below"
     if result.task_endurance_s is None:
-        return "no group tires: the task's endurance is unlimited or the answer is flagged"
+        return "no group tires: the task's endurance is unlimited"
     load = result.load_pct_mvc[result.groups.index(result.limiting)]
     return (
         f"task's static endurance {result.task_endurance_s / 60:.2f} min,\n"
@@ -102,14 +104,14 @@ def _title(result: Sensitivity) -> str:
 
 def _echo(result: Sensitivity, problem: str, top: int, kinds: tuple[str, ...]) -> None:
     posture = result.posture
-    how = (
-        "posture derivative by the implicit function theorem"
-        if posture.dq is not None
-        else "posture held fixed"
-    )
+    if not result.answer.problem.tasks:
+        how = "the file's posture (no tasks)"
+    elif posture.dq is not None:
+        how = "posture derivative by the implicit function theorem"
+    else:
+        how = "posture held fixed"
     click.echo(
-        f"{problem}: {len(result.inputs)} inputs, {how}\n"
-        f"{_title(result).replace(chr(10), ' ')}\n"
+        f"{problem}: {len(result.inputs)} inputs, {how}\n{_title(result).replace(chr(10), ' ')}\n"
     )
     ranked = result.ranked(kinds)
     rows = ranked[:top]
