@@ -13,13 +13,7 @@ The names below are the public API (``docs/api.md``); they load on first use, so
 from __future__ import annotations
 
 from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
 from typing import Any
-
-try:
-    __version__ = version("casadi_posture")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
 
 #: Public name -> the module that defines it.
 _PUBLIC = {
@@ -56,7 +50,21 @@ _PUBLIC = {
 __all__ = ["__version__", *_PUBLIC]
 
 
+def _version() -> str:
+    """The installed version; looked up on first use (``importlib.metadata`` is slow to
+    import, and the command line must answer Ctrl-C from its first milliseconds)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("casadi_posture")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        return "0+unknown"
+
+
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        value = globals()["__version__"] = _version()
+        return value
     if name in _PUBLIC:
         value = getattr(import_module(_PUBLIC[name]), name)
         globals()[name] = value

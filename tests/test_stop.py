@@ -44,6 +44,25 @@ def _ctrl_c(process: subprocess.Popen) -> tuple[int, float, str]:
     return process.returncode, time.monotonic() - start, stderr
 
 
+def _wait_until_loading(process: subprocess.Popen, library: str) -> None:
+    """Return once the process has mapped a shared library whose path names
+    ``library`` (Linux's /proc; elsewhere a fixed wait): it is then inside its imports,
+    whatever the machine's load, and not before the entry point could catch Ctrl-C."""
+    maps = Path(f"/proc/{process.pid}/maps")
+    if not maps.parent.exists():
+        time.sleep(0.2)
+        return
+    deadline = time.monotonic() + 30.0
+    while time.monotonic() < deadline and process.poll() is None:
+        try:
+            if library in maps.read_text():
+                return
+        except OSError:
+            pass
+        time.sleep(0.002)
+    raise AssertionError(f"the command never loaded {library} (exit code {process.poll()})")
+
+
 def _cycles(path: Path, duration: float, mass: float = 1.0) -> Path:
     text = CYCLES.replace("duration_s = 1200.0", f"duration_s = {duration}")
     path.write_text(text.replace("mass_kg = 1.0", f"mass_kg = {mass}"))
@@ -230,7 +249,7 @@ def test_ctrl_c_during_startup_is_one_line() -> None:
         stderr=subprocess.PIPE,
         text=True,
     )
-    time.sleep(0.2)
+    _wait_until_loading(process, "numpy")
     code, _, stderr = _ctrl_c(process)
     assert code == 130 and stderr.strip() == "interrupted", (code, stderr)
 
