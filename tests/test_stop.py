@@ -35,6 +35,20 @@ def _command(*args: object) -> list[str]:
     return [sys.executable, "-m", "casadi_posture", *map(str, args)]
 
 
+def _start(command: list[str]) -> subprocess.Popen:
+    """Run a command in its own process group, with Ctrl-C as a terminal's foreground job
+    gets it: a suite started in the background inherits SIGINT ignored, and the command
+    rightly leaves an ignored Ctrl-C alone."""
+    return subprocess.Popen(
+        command,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
 def _ctrl_c(process: subprocess.Popen) -> tuple[int, float, str]:
     """Send SIGINT to the command's whole process group, as a terminal's Ctrl-C does; the
     exit code, the time it took to stop [s] and what it wrote on stderr."""
@@ -91,13 +105,7 @@ def _rows(path: Path) -> list[dict[str, str]]:
 def test_ctrl_c_stops_simulate_and_keeps_the_partial_timeline(tmp_path: Path) -> None:
     problem = _cycles(tmp_path / "long.toml", 20000.0)
     out = tmp_path / "run"
-    process = subprocess.Popen(
-        _command("simulate", problem, "--out", out),
-        start_new_session=True,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    process = _start(_command("simulate", problem, "--out", out))
     time.sleep(6.0)  # past the imports and the build, well inside the run
     code, took, stderr = _ctrl_c(process)
     assert code == 130 and took < STOP_WITHIN_S, (code, took, stderr)
@@ -121,9 +129,7 @@ def test_ctrl_c_stops_a_parallel_batch_keeping_finished_cases(tmp_path: Path) ->
         _cycles(folder / f"b{i}.toml", 5000.0, 1.0 + 0.1 * i)
     out = tmp_path / "out"
     command = _command("batch", folder, "--out", out, "--jobs", "2", "--quiet")
-    process = subprocess.Popen(
-        command, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-    )
+    process = _start(command)
     cases = out / "cases"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not all((cases / n).is_dir() for n in ("a0", "a1")):
@@ -242,13 +248,7 @@ def test_a_problem_without_tasks_is_skipped_not_failed(tmp_path: Path) -> None:
 def test_ctrl_c_during_startup_is_one_line() -> None:
     """Even while the libraries load, Ctrl-C ends with one line and exit code 130."""
     script = Path(sys.executable).parent / "casadi-posture"
-    process = subprocess.Popen(
-        [str(script), "validate", str(PROBLEMS / "holding_m45.toml")],
-        start_new_session=True,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    process = _start([str(script), "validate", str(PROBLEMS / "holding_m45.toml")])
     _wait_until_loading(process, "numpy")
     code, _, stderr = _ctrl_c(process)
     assert code == 130 and stderr.strip() == "interrupted", (code, stderr)
