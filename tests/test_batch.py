@@ -17,6 +17,7 @@ from click.testing import CliRunner
 from conftest import PROBLEMS
 
 from casadi_posture.cli import main
+from casadi_posture.runs import batch
 
 HOLD = (PROBLEMS / "holding_m45.toml").read_text()
 
@@ -213,7 +214,10 @@ def test_bad_whatif_input(tmp_path: Path, args: list[str], needle: str) -> None:
     assert needle in result.stderr and len(result.stderr.strip().splitlines()) == 1
 
 
-def test_an_unreachable_scheduler_is_a_usage_error(tmp_path: Path) -> None:
+def test_an_unreachable_scheduler_is_a_usage_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(batch, "CONNECT_S", 2.0)  # the same refusal, sooner than 20 s
     folder = _problems(tmp_path / "in", 1, 30.0)
     result = run(
         "batch",

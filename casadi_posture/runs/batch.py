@@ -385,6 +385,8 @@ def _processes(todo: list[Case], jobs: int) -> Iterator[Outcome]:
 
 #: How often [s] a waiting batch looks for Ctrl-C.
 POLL_S = 0.1
+#: How long [s] to try to reach a Dask scheduler before saying it is not there.
+CONNECT_S = 20.0
 
 
 def _dask(todo: list[Case], scheduler: str) -> Iterator[Outcome]:
@@ -395,7 +397,7 @@ def _dask(todo: list[Case], scheduler: str) -> Iterator[Outcome]:
             None, "--scheduler", scheduler, "Dask installed: pip install 'casadi_posture[dask]'"
         ) from None
     try:
-        client = Client(scheduler, timeout="20s")
+        client = Client(scheduler, timeout=f"{CONNECT_S}s")
     except OSError as error:
         raise ProblemError(
             None, "--scheduler", scheduler, f"the address of a running Dask scheduler ({error})"
