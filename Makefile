@@ -3,11 +3,13 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= out/demo
+# pytest workers (pytest-xdist): one per core; TEST_WORKERS=0 runs the suite in one process.
+TEST_WORKERS ?= auto
 
 .PHONY: demo test lint benchmark clean
 
 # One stamp per install: the demo needs only the package; the tests add pinocchio,
-# hypothesis, pandas, pyarrow and dask; lint and the benchmarks add ruff.
+# pytest-xdist, hypothesis, pandas, pyarrow and dask; lint and the benchmarks add ruff.
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
@@ -41,7 +43,7 @@ demo: $(VENV)/.demo
 	@echo "demo outputs in $(DEMO_OUT)/"
 
 test: $(VENV)/.test
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n $(TEST_WORKERS)
 
 benchmark: $(VENV)/.dev
 	$(BIN)/python benchmarks/scaling.py
