@@ -184,6 +184,27 @@ def test_duty_cycle_command(tmp_path: Path) -> None:
     assert rows[1]["sustainable_t_on_s"] == f"{searches[1]['sustainable_t_on_s']:g}"
 
 
+def test_a_duty_cycle_over_strength_is_flagged_not_a_plain_zero() -> None:
+    """20 kg at arm's length is over the shoulder's strength: no rest helps, and the
+    answer must say why and exit 1, not pass as an ordinary 0 %."""
+    heavy = _run(
+        "duty-cycle",
+        HORIZONTAL,
+        "--t-off",
+        "30",
+        "--horizon",
+        "120",
+        "--set",
+        "loads[0].mass_kg=20",
+    )
+    assert heavy.exit_code == 1, heavy.output
+    assert "no duty cycle works" in heavy.output
+    assert "FLAGGED: over strength at the start (elbow_flexors, shoulder_flexors)" in heavy.output
+    light = duty_cycle(load_problem(HORIZONTAL), 30.0, horizon_s=120.0)
+    assert not light.flags and all(t.over_strength == [] for t in light.trials)
+    assert all(t.balance_margin_m is None for t in light.trials)
+
+
 @pytest.mark.parametrize(
     ("args", "key"),
     [

@@ -48,7 +48,9 @@ Verdict = Literal["bracketed", "continuous", "none", "never_held", "interrupted"
 class Trial:
     """One simulation of the search: the hold per cycle [s], whether a group reached the
     fatigue threshold (None: interrupted before the horizon), when [s] and which group, the
-    largest fatigue level of the run, IK steps no solver certified, and its wall time [s]."""
+    largest fatigue level of the run, IK steps no solver certified, the groups over their
+    strength at the start, the smallest balance margin [m] (None: no balance task) and its
+    wall time [s]."""
 
     t_on_s: float
     reached: bool | None
@@ -56,6 +58,8 @@ class Trial:
     half_joint: str | None
     max_fatigue: float
     ik_failures: int
+    over_strength: list[str]
+    balance_margin_m: float | None
     wall_time_s: float
 
 
@@ -105,6 +109,19 @@ class DutyCycle:
         failed = sum(t.ik_failures for t in self.trials)
         if failed:
             out.append(f"{failed} steps where neither IK solver converged in the trials")
+        over = sorted({g for t in self.trials for g in t.over_strength})
+        if over:
+            out.append(
+                f"over strength at the start ({', '.join(over)}): the load cannot be held "
+                "at all, whatever the rest"
+            )
+        fallen = [t for t in self.trials if (t.balance_margin_m or 0.0) < 0]
+        if fallen:
+            out.append(
+                f"balance lost in {len(fallen)} of {len(self.trials)} simulations: the "
+                f"centre of mass leaves the support polygon by up to "
+                f"{-min(t.balance_margin_m for t in fallen):.3g} m"
+            )
         return out
 
     def summary(self) -> dict[str, Any]:
@@ -194,6 +211,12 @@ def duty_cycle(
                 None if crossing is None else crossing.half_joint,
                 float(result.timeline.fatigue.max(initial=0.0)),
                 result.ik_failures,
+                [
+                    e.half_joint
+                    for e in result.events
+                    if e.kind == "over_strength" and e.time_s == 0
+                ],
+                _smallest_margin(result),
                 result.wall_time_s,
             )
         )
@@ -307,6 +330,14 @@ def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
             )
         )
     return paths
+
+
+def _smallest_margin(result: SimulationResult) -> float | None:
+    """The run's smallest balance margin [m]; None without a balance task."""
+    balance = result.timeline.balance
+    if balance is None or not balance[1].size:
+        return None
+    return float(balance[1].min())
 
 
 def _t_on(result: SimulationResult) -> str:
