@@ -479,11 +479,12 @@ class Design:
         return self.best.value - self.start.value
 
     @property
-    def ratio(self) -> float:
-        """best / start [-] (``inf``: from a finite to an unlimited endurance)."""
+    def ratio(self) -> float | None:
+        """best / start [-] (``inf``: from a finite to an unlimited endurance; None from a
+        start of 0, where no ratio exists)."""
         if math.isinf(self.best.value) and math.isinf(self.start.value):
             return 1.0
-        return self.best.value / self.start.value if self.start.value > 0 else math.inf
+        return self.best.value / self.start.value if self.start.value > 0 else None
 
     def at_bound(self, j: int) -> str | None:
         """'lower' or 'upper' when design variable j ends at that bound, else None."""

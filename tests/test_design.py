@@ -161,6 +161,20 @@ def test_cli_json_and_figure(tmp_path: Path) -> None:
     assert again.exit_code == 2 and "--force" in again.stderr
 
 
+def test_a_load_over_strength_is_flagged_and_has_no_gain_ratio() -> None:
+    """20 kg on the hysteresis arm is over strength wherever the line is: endurance 0 at
+    the start and at the best, so the gain is 0 and no ratio exists (0/0 is not ∞)."""
+    args = ["design", str(PROBLEMS / "line_plane_hysteresis.toml"), "--free"]
+    args += ["tasks[0].point_m[2]=-0.5:0.1", "--set", "loads[0].mass_kg=20"]
+    result = CliRunner().invoke(main, [*args, "--json"])
+    assert result.exit_code == 1, result.output
+    data = json.loads(result.stdout)
+    assert data["start"]["endurance_min"] == 0 and data["gain"]["ratio"] is None
+    assert any("over strength" in flag for flag in data["flags"])
+    table = CliRunner().invoke(main, args)
+    assert "gain: +0.000 min\n" in table.output and "×" not in table.output
+
+
 @pytest.mark.parametrize(
     ("args", "words"),
     [

@@ -160,7 +160,8 @@ def _echo(answer: Design) -> None:
     )
     gain = "unlimited" if math.isinf(answer.gain) else f"{answer.gain:+.3f}"
     units = "min" if answer.objective == "endurance" else "percentage points"
-    click.echo(f"\ngain: {gain} {units} (×{fmt(answer.ratio, 3)})")
+    ratio = "" if answer.ratio is None else f" (×{fmt(answer.ratio, 3)})"
+    click.echo(f"\ngain: {gain} {units}{ratio}")
     tolerance = answer.to_dict()["check"]["tolerance"]
     verdict = "agrees" if answer.agrees else "DIFFERS"
     click.echo(f"re-solve check: {verdict} (tolerance {tolerance})")
