@@ -97,6 +97,9 @@ COMMANDS = [
     "whatif",
     "compare",
     "batch",
+    "sensitivity",
+    "design",
+    "duty-cycle",
 ]
 VARY_KEYS = [
     "loads[0].mass_kg",
@@ -231,7 +234,7 @@ def cases(draw: Callable) -> Case:
             st.sampled_from(
                 ["plausible"] * 4
                 + ["perturb"] * 2
-                + ["delete", "set", "add", "swap", "slip", "truncate", "nest"]
+                + ["delete", "set", "add", "swap", "slip", "truncate", "nest", "schedule"]
             )
         )
         paths = _paths(data)
@@ -243,6 +246,13 @@ def cases(draw: Callable) -> Case:
             depth = draw(st.integers(10, 600))
             data["deep"] = json.loads("[" * depth + "]" * depth)
             mutations.append(f"nest {depth}")
+            continue
+        if kind == "schedule":
+            data["schedule"] = {
+                "t_on_s": draw(st.sampled_from([30.0, 60.0, 90.0, *WEIRD_VALUES])),
+                "t_off_s": draw(st.sampled_from([0.0, 15.0, 30.0, *WEIRD_VALUES])),
+            }
+            mutations.append("schedule")
             continue
         if kind == "add":
             tables = [p for p in paths if isinstance(_get_parent(data, p)[0][p[-1]], dict)]
@@ -286,7 +296,7 @@ def cases(draw: Callable) -> Case:
     text = toml_text(data)
     if truncate:
         text = text[: draw(st.integers(0, len(text)))]
-    options = draw(_options(command))
+    options = draw(_options(command, data))
     return Case(source, tuple(mutations), text, command, tuple(options))
 
 
@@ -314,6 +324,43 @@ VARY_VALUES = {
     "loads[9].mass_kg": ["1"],
     "tasks[0].point_m": ["[0.35, 0.0, -0.25]", "[0.6, 0.0, 0.0]", "[35, 0, -25]"],
 }
+
+
+@st.composite
+def _design_free(draw: Callable, data: dict) -> str:
+    """A ``--free KEY=LO:HI``: two times in three a target coordinate of the file's own
+    tasks within bounds around its value, else a key or bounds from the lists below."""
+    tasks = data.get("tasks") if isinstance(data.get("tasks"), list) else []
+    own = [
+        (f"tasks[{i}].{name}[{k}]", point[k])
+        for i, task in enumerate(tasks)
+        if isinstance(task, dict)
+        for name in ("point_m", "target_m")
+        if isinstance(point := task.get(name), list) and len(point) == 3
+        for k in range(3)
+        if _is_number(point[k]) and math.isfinite(point[k])
+    ]
+    if own and draw(st.integers(0, 2)):
+        key, value = draw(st.sampled_from(own))
+        below, above = draw(st.sampled_from([(0.2, 0.1), (0.05, 0.3), (0.0, 0.2)]))
+        return f"{key}={value - below:.4g}:{value + above:.4g}"
+    return f"{draw(st.sampled_from(DESIGN_KEYS))}={draw(st.sampled_from(DESIGN_BOUNDS))}"
+
+
+SENSITIVITY_KINDS = ["load", "target", "posture", "body", "strength", "passive", "endurance"]
+DESIGN_KEYS = [
+    "tasks[0].point_m[2]",
+    "tasks[0].target_m[2]",
+    "tasks[1].target_m[2]",
+    "tasks[0].point_m[2],tasks[1].target_m[2]",
+    "tasks[2].target_m[2],tasks[3].target_m[2]",
+    "tasks[0].point_m",
+    "loads[0].mass_kg",
+    "nope",
+]
+#: Bounds in m: plausible, reversed, empty, not finite, a cm-for-m slip, not numbers.
+DESIGN_BOUNDS = ["-0.5:0.1", "-0.3:-0.2", "1.0:1.6", "0.1:-0.5", "1:1", "nan:1", "-50:10", "a:b"]
+DESIGN_OBJECTIVES = ["endurance", "capable-male", "capable-female"]
 WEIRD_OPTIONS = ["nan", "inf", "-1", "1e308", "abc", "", "0", "1e-9"]
 
 
@@ -323,7 +370,7 @@ def _maybe_weird(draw: Callable, plausible: list[str]) -> str:
 
 
 @st.composite
-def _options(draw: Callable, command: str) -> list[str]:
+def _options(draw: Callable, command: str, data: dict) -> list[str]:
     if command in ("torques", "solve", "describe"):
         options = ["--json"] if draw(st.booleans()) else []
         if command == "torques" and draw(st.booleans()):
@@ -357,6 +404,32 @@ def _options(draw: Callable, command: str) -> list[str]:
             options += ["--vary", "loads[0].mass_kg=" + ",".join(str(v) for v in range(1, 40))]
             options += ["--vary", "body.mass_kg=" + ",".join(str(v) for v in range(40, 80))]
         return options
+    if command == "sensitivity":
+        options = ["--json"] if draw(st.booleans()) else []
+        if draw(st.booleans()):
+            options += ["--top", _maybe_weird(draw, ["1", "5", "40"])]
+        if draw(st.booleans()):
+            options += ["--kind", draw(st.sampled_from([*SENSITIVITY_KINDS, "loads"]))]
+        return options + (["--out", "FIG"] if draw(st.booleans()) else [])
+    if command == "design":
+        options = []
+        for _ in range(draw(st.integers(1, 2))):
+            options += ["--free", draw(_design_free(data))]
+        if draw(st.booleans()):
+            options += ["--objective", draw(st.sampled_from(DESIGN_OBJECTIVES))]
+        if draw(st.booleans()):
+            options += ["--starts", _maybe_weird(draw, ["1", "2", "3"])]
+        if draw(st.booleans()):
+            options += ["--json"]
+        return options + (["--out", "FIG"] if draw(st.booleans()) else [])
+    if command == "duty-cycle":
+        options = ["--t-off", _maybe_weird(draw, ["0", "30", "15,60", "30,30"])]
+        options += ["--horizon", _maybe_weird(draw, ["60", "120", "300"])]
+        if draw(st.booleans()):
+            options += ["--tolerance", _maybe_weird(draw, ["5", "20"])]
+        if draw(st.booleans()):
+            options += ["--json"]
+        return options + (["--out", "FIG"] if draw(st.booleans()) else [])
     return []
 
 
