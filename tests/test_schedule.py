@@ -251,6 +251,12 @@ def test_whatif_varies_the_schedule_of_a_problem_without_one(tmp_path: Path) -> 
     cases = tmp_path / "w" / "cases"
     cycles = [json.loads(p.read_text())["schedule"] for p in cases.glob("*/summary.json")]
     assert sorted(c["work_cycles"] for c in cycles) == [4, 7]
+    # the table and the CSV carry them: begun (held whole). Without rest the task is lost
+    # in the 7th hold (369 s); with 60 s the 4th hold begins at 360 s and the run ends at 400
+    assert [rows[t]["work_cycles"] for t in (0.0, 60.0)] == ["7", "4"]
+    assert [rows[t]["work_cycles_completed"] for t in (0.0, 60.0)] == ["6", "3"]
+    assert "work cycles (held whole)" in result.output
+    assert "7 (6)" in result.output and "4 (3)" in result.output
 
 
 def test_simulate_writes_the_phase_and_schedule(tmp_path: Path) -> None:

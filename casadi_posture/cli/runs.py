@@ -463,8 +463,11 @@ def whatif(
     keys = [k for k, _ in parsed]
     headers = [*keys, "reached", "limiting group at start", "region", "endurance at start (min)"]
     headers += ["capable men (%)", "capable women (%)"]
+    scheduled = not static and any(row.get("work_cycles") is not None for row in report.rows)
     if not static:
         headers += ["first at threshold (s)", "exhausted group", "cycles", "task held (s)"]
+    if scheduled:
+        headers.append("work cycles (held whole)")
     headers.append("flags")
     order = {k: [str(v) for v in values] for k, values in parsed}
 
@@ -496,6 +499,8 @@ def whatif(
                 row["fatigue_recovery_cycles"],
                 _held(row),
             ]
+        if scheduled:
+            line.append(_work_cycles(row))
         rows.append([*line, row["flags"] or "-"])
     right = {headers.index(h) for h in ("task held (s)",) if h in headers}
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
@@ -503,6 +508,13 @@ def whatif(
     click.echo(table(headers, rows, digits=2, right=right))
     click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(report.figures)} in {out}")
     _finish(report)
+
+
+def _work_cycles(row: dict[str, Any]) -> str:
+    """``13 (12)``: the work cycles a scheduled case began, and those held to their end."""
+    if row.get("work_cycles") is None:
+        return "-"
+    return f"{row['work_cycles']} ({row['work_cycles_completed']})"
 
 
 def _yes_no(value: Any) -> str:

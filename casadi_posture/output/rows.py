@@ -40,6 +40,7 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     the first recovery posture [deg] and its effector position [m], and the flags."""
     report = summary(result)
     task, first, exhausted = report["task"], report["first_to_fatigue"], report["exhausted_group"]
+    schedule = report["schedule"]
     start = {
         g["half_joint"]: (
             g["initial_load_pct_mvc"],
@@ -65,6 +66,8 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
             "exhausted_region": exhausted["region"] if exhausted else "",
             "exhausted_s": exhausted["time_s"] if exhausted else None,
             "fatigue_recovery_cycles": report["fatigue_recovery_cycles"],
+            "work_cycles": schedule["work_cycles"] if schedule else None,
+            "work_cycles_completed": schedule["work_cycles_completed"] if schedule else None,
             "task_held_s": task["held_s"],
             "task_held_is_lower_bound": task["held_s_is_lower_bound"],
             "task_lost_reason": task["lost"]["reason"] if task["lost"] else "",
