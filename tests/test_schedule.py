@@ -12,9 +12,10 @@ import pytest
 from click.testing import CliRunner
 
 from casadi_posture import interrupt
+from casadi_posture.api import Simulation
 from casadi_posture.cli import main
 from casadi_posture.output.results import summary, timeline_columns
-from casadi_posture.problem import load_problem
+from casadi_posture.problem import load_problem, problem_from_data
 from casadi_posture.runs.duty_cycle import duty_cycle
 from casadi_posture.simulation import simulate
 from casadi_posture.static import at_posture
@@ -257,6 +258,14 @@ def test_whatif_varies_the_schedule_of_a_problem_without_one(tmp_path: Path) -> 
     assert [rows[t]["work_cycles_completed"] for t in (0.0, 60.0)] == ["6", "3"]
     assert "work cycles (held whole)" in result.output
     assert "7 (6)" in result.output and "4 (3)" in result.output
+    assert all((case / "schedule.png").stat().st_size > 0 for case in cases.iterdir())
+
+
+def test_the_api_writes_the_schedule_figure_too(tmp_path: Path) -> None:
+    problem = load_problem(PROBLEMS / "holding_horizontal_work_rest.toml")
+    problem = problem_from_data(problem.data, problem.path, {"simulation.duration_s": 120.0})
+    written = {p.name for p in Simulation(simulate(problem)).write(tmp_path / "s")}
+    assert "schedule.png" in written and (tmp_path / "s" / "schedule.png").stat().st_size > 0
 
 
 def test_simulate_writes_the_phase_and_schedule(tmp_path: Path) -> None:

@@ -27,7 +27,6 @@ from casadi_posture.output.animation import WRITERS, check_format
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
-from casadi_posture.output.schedule_plots import schedule_figures
 from casadi_posture.runs.whatif import MAX_CASES
 from casadi_posture.static import law
 
@@ -179,7 +178,7 @@ def _manifest(path: Path) -> dict[str, Any]:
 
 def _write(run: api.Simulation, out: Path, command: list[str]) -> list[Path]:
     files = write_results(run.result, out, command=command)
-    return files + plot_simulation(run.result, out) + schedule_figures(run.result, out)
+    return files + plot_simulation(run.result, out)
 
 
 def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:

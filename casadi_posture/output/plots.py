@@ -16,6 +16,7 @@ from casadi_posture.ik.tasks import Line, Plane, Position
 from casadi_posture.output.figures3d import plot_postures_3d
 from casadi_posture.output.key_postures import key_postures, recoveries, title
 from casadi_posture.output.saving import save_figure
+from casadi_posture.output.schedule_plots import plot_schedule
 from casadi_posture.output.skeleton import Skeleton, is_planar
 from casadi_posture.simulation import SimulationResult
 
@@ -361,7 +362,8 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
 def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
     """All figures of a simulation into ``out`` (none for a run stopped before its first
     step): postures.png in the plane of motion for a planar body, in four views for a 3-D
-    one; fatigue_regions.png for a body of more than one region."""
+    one; fatigue_regions.png for a body of more than one region; schedule.png for a run
+    with a work–rest schedule."""
     if result.timeline.time.size == 0:
         return []
     body = result.problem.body
@@ -374,4 +376,6 @@ def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
     ]
     if len(_regions(result)) > 1:
         figures.append(plot_fatigue_regions(result, out / "fatigue_regions.png"))
+    if result.schedule is not None:
+        figures.append(plot_schedule(result, out / "schedule.png"))
     return figures

@@ -116,11 +116,3 @@ def plot_duty_vs_rest(
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     return save_figure(fig, path)
-
-
-def schedule_figures(result: SimulationResult, out: Path) -> list[Path]:
-    """schedule.png in ``out`` for a run with a work–rest schedule (none otherwise, or when
-    no step ran)."""
-    if result.schedule is None or result.timeline.time.size == 0:
-        return []
-    return [plot_schedule(result, out / "schedule.png")]
