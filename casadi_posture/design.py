@@ -600,7 +600,7 @@ def design(
     depth = hierarchy.depth if keep_levels is None else keep_levels
     kept = tuple(k for k, lv in enumerate(answer.levels) if lv.achieved and k < depth)
     start = _Start(problem, objective, quantities, answer, score(answer, objective), kept)
-    notes = []
+    notes = [static.SCHEDULE_NOTE] if problem.spec.schedule is not None else []
     dropped = [lv for lv in answer.levels if lv.level - 1 not in kept]
     if dropped:
         reasons = {True: "above --keep-levels", False: "not achieved at the start"}

@@ -32,6 +32,11 @@ from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
 STRENGTH_PCT_MVC = 100.0
+#: What every static answer says of a problem with a work–rest ``[schedule]``.
+SCHEDULE_NOTE = (
+    "the endurance here is a continuous hold's: the [schedule]'s rests are not in it "
+    "(simulate runs them; whatif --vary schedule.t_off_s=... and duty-cycle compare them)"
+)
 
 Verdict = Literal["carries nothing", "unlimited", "limited", "over strength"]
 

@@ -298,3 +298,22 @@ def test_ctrl_c_stops_the_search_with_the_bracket_so_far(monkeypatch: pytest.Mon
     result = _run("duty-cycle", HORIZONTAL, "--t-off", "30", "--horizon", "300")
     assert result.exit_code == interrupt.EXIT_CODE
     assert "interrupted: bracket so far [1, 300] s" in result.output
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["torques"],
+        ["solve"],
+        ["sensitivity", "--top", "1"],
+        ["design", "--free", "tasks[0].point_m[2],tasks[1].target_m[2]=-0.5:0.1"],
+    ],
+)
+def test_static_answers_say_a_schedule_is_not_in_them(command: list[str]) -> None:
+    """A static endurance is a continuous hold's: on a file with a [schedule] each static
+    command says so, and says nothing of it on the same file without one."""
+    scheduled = _run(command[0], PROBLEMS / "holding_horizontal_work_rest.toml", *command[1:])
+    plain = _run(command[0], HORIZONTAL, *command[1:])
+    assert scheduled.exit_code == plain.exit_code == 0, scheduled.output + plain.output
+    assert "a continuous hold's: the [schedule]'s rests are not in it" in scheduled.output
+    assert "[schedule]" not in plain.output

@@ -16,7 +16,7 @@ from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import table
 from casadi_posture.problem import Problem, load_problem
 from casadi_posture.spec.overrides import parse_value, split_assignment
-from casadi_posture.static import StaticAnswer
+from casadi_posture.static import SCHEDULE_NOTE, StaticAnswer
 
 INTERRUPTED = interrupt.EXIT_CODE
 
@@ -181,6 +181,8 @@ def echo_torques(answer: StaticAnswer) -> None:
     click.echo(answer.capable.sd_line())
     for note in answer.capable.notes():
         click.echo(f"note: {note}")
+    if answer.problem.spec.schedule is not None:
+        click.echo(f"note: {SCHEDULE_NOTE}")
 
 
 def echo_free_dofs(problem: Problem) -> None:

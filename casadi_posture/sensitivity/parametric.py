@@ -37,6 +37,7 @@ from casadi_posture.data.parameters import Parameter
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import CentreOfMass, Gaze, JointReference, Line, Plane, Position
 from casadi_posture.problem import Problem, problem_from_data
+from casadi_posture.static import SCHEDULE_NOTE
 
 Kind = Literal["load", "target", "posture", "body", "strength", "passive", "endurance"]
 KINDS: tuple[Kind, ...] = typing.get_args(Kind)
@@ -86,6 +87,8 @@ class ParametricProblem:
         self.symbolic = symbolic
         self.inputs: list[Input] = []
         self.left_out: dict[str, str] = {}
+        if problem.spec.schedule is not None:
+            self.left_out["schedule"] = SCHEDULE_NOTE
         self._symbols: list[ca.SX] = []
         self._records: dict[str, ca.SX] = {}
         slopes = self._body_slopes() if symbolic and problem.spec.body.tree is None else {}
