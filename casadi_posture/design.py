@@ -565,6 +565,30 @@ class _Start:
     kept: tuple[int, ...]
 
 
+def spread(count: int, dims: int) -> np.ndarray:
+    """``count − 1`` points of the unit box [0, 1]^dims, one row each: the Hammersley set
+    of ``count`` points without its origin. The first coordinate is evenly spaced (i/count:
+    one free key gets evenly spaced starts); the others are the radical inverses of i in
+    the primes 2, 3, 5, ..., so that the points fill the box instead of its diagonal."""
+    primes: list[int] = []
+    candidate = 2
+    while len(primes) < dims - 1:
+        if all(candidate % q for q in primes):
+            primes.append(candidate)
+        candidate += 1
+
+    def radical_inverse(i: int, base: int) -> float:
+        value, scale = 0.0, 1.0 / base
+        while i:
+            i, digit = divmod(i, base)
+            value += digit * scale
+            scale /= base
+        return value
+
+    rows = [[i / count, *(radical_inverse(i, b) for b in primes)] for i in range(1, count)]
+    return np.array(rows, dtype=float).reshape(count - 1, dims)
+
+
 def design(
     problem: Problem,
     free: Mapping[str, tuple[float, float]],
@@ -577,8 +601,8 @@ def design(
     re-solving the IK with the file's solver at the best design. The levels the IK achieves
     at the start are kept as equalities, only the first ``keep_levels`` of them if given
     (a posture task the start happens to achieve would otherwise fix the posture).
-    ``starts`` > 1 also starts the NLP from the IK at ``starts − 1`` designs evenly spaced
-    on the diagonal of the bounds (a local method: the best answer is kept)."""
+    ``starts`` > 1 also starts the NLP from the IK at ``starts − 1`` designs spread over
+    the bounds (:func:`spread`; a local method: the best answer is kept)."""
     if starts < 1:
         raise ProblemError(problem.path, "--starts", starts, "a number of starts ≥ 1")
     if objective not in OBJECTIVES:
@@ -634,8 +658,8 @@ def design(
     lower = np.array([f.lower_m for f in quantities])
     upper = np.array([f.upper_m for f in quantities])
     points = [(q0, d0)]
-    for i in range(1, starts):
-        d_i = lower + (upper - lower) * i / starts
+    for fraction in spread(starts, len(quantities)):
+        d_i = lower + (upper - lower) * fraction
         at = problem_from_data(problem.data, problem.path, _overrides(quantities, d_i))
         other = static.solve(at)
         if all(other.levels[k].achieved for k in kept):
@@ -643,7 +667,8 @@ def design(
     if starts > 1:
         notes.append(
             f"{len(points)} starts (the file's design and {len(points) - 1} of {starts - 1} "
-            "evenly spaced designs whose IK keeps the task); the best answer is reported"
+            "designs spread over the bounds whose IK keeps the task); the best answer is "
+            "reported"
         )
     body = problem.body
     lbx = np.concatenate([body.lower, lower, [-np.inf]])

@@ -14,7 +14,7 @@ from click.testing import CliRunner
 from conftest import PROBLEMS
 
 from casadi_posture.cli import main
-from casadi_posture.design import design, independent_rows
+from casadi_posture.design import design, independent_rows, spread
 from casadi_posture.problem import load_problem, problem_from_data
 
 X_M = 0.40  # the wrist's fixed horizontal distance from the shoulder [m]
@@ -209,3 +209,17 @@ def test_more_starts_never_do_worse() -> None:
     one, three = design(problem, free), design(problem, free, starts=3)
     assert three.success and three.best.value >= one.best.value * (1 - 1e-9)
     assert any("3 starts" in note for note in three.notes)
+
+
+def test_the_starts_are_a_hammersley_set_that_fills_the_box() -> None:
+    """By hand: the radical inverse of 1, 2, 3, 4 in base 2 is .5, .25, .75, .125 and of 1,
+    2 in base 3 is 1/3, 2/3; one free quantity gets evenly spaced starts."""
+    np.testing.assert_allclose(spread(4, 1).ravel(), [0.25, 0.5, 0.75], rtol=0, atol=1e-15)
+    two = spread(5, 2)
+    np.testing.assert_allclose(two[:, 0], [0.2, 0.4, 0.6, 0.8], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(two[:, 1], [0.5, 0.25, 0.75, 0.125], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(spread(3, 3)[:, 2], [1 / 3, 2 / 3], rtol=0, atol=1e-15)
+    many = spread(64, 12)
+    assert many.shape == (63, 12) and np.all((many > 0) & (many < 1))
+    assert not np.allclose(many[:, 0], many[:, 1])  # off the diagonal
+    assert spread(1, 2).shape == (0, 2)

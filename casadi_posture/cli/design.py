@@ -46,7 +46,7 @@ from casadi_posture.output.report import fmt, table
     type=int,
     default=1,
     show_default=True,
-    help="Also start the NLP from the IK at N-1 designs evenly spaced within the bounds "
+    help="Also start the NLP from the IK at N-1 designs spread over the bounds "
     "(a local method; the best answer is kept).",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
