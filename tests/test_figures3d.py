@@ -18,7 +18,6 @@ from casadi_posture.output import animation, scene
 from casadi_posture.output.animation import frame_steps, write_animation
 from casadi_posture.output.figures3d import postures_3d_figure
 from casadi_posture.output.plots import REGION_MIN_FATIGUE, fatigue_regions_figure
-from casadi_posture.output.skeleton import is_planar
 
 HUMANOID = Path(__file__).resolve().parents[1] / "benchmarks" / "problems" / "humanoid_28.toml"
 ARM = PROBLEMS / "holding_m45.toml"
@@ -40,8 +39,8 @@ def arm() -> cp.api.Simulation:
 def test_planar_bodies_keep_the_plane_figure_and_3d_bodies_get_four_views(
     humanoid: cp.api.Simulation, arm: cp.api.Simulation, tmp_path: Path
 ) -> None:
-    assert is_planar(arm.result.problem.body)
-    assert not is_planar(humanoid.result.problem.body)
+    assert arm.result.problem.body.planar
+    assert not humanoid.result.problem.body.planar
     for name, run in (("humanoid", humanoid), ("arm", arm)):
         files = run.write(tmp_path / name)
         names = {f.name for f in files}

@@ -213,6 +213,12 @@ class BodyModel:
         """Mass of all segments [kg]."""
         return float(sum(s.mass for s in self.segments))
 
+    @property
+    def planar(self) -> bool:
+        """Whether the body moves in one plane: every DOF axis parallel to the first."""
+        first = self.axis(self.dofs[0].name)
+        return all(np.linalg.norm(np.cross(first, self.axis(d.name))) < 1e-9 for d in self.dofs)
+
     def axis(self, dof: str) -> np.ndarray:
         """Unit axis of ``dof`` in the world frame at the zero posture."""
         a = np.asarray(self.dofs[self.index[dof]].axis, dtype=float)

@@ -17,7 +17,7 @@ from casadi_posture.output.figures3d import plot_postures_3d
 from casadi_posture.output.key_postures import key_postures, recoveries, title
 from casadi_posture.output.saving import save_figure
 from casadi_posture.output.schedule_plots import plot_schedule
-from casadi_posture.output.skeleton import Skeleton, is_planar
+from casadi_posture.output.skeleton import Skeleton
 from casadi_posture.simulation import SimulationResult
 
 
@@ -367,7 +367,7 @@ def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
     if result.timeline.time.size == 0:
         return []
     body = result.problem.body
-    draw_postures = plot_postures if is_planar(body) else plot_postures_3d
+    draw_postures = plot_postures if body.planar else plot_postures_3d
     figures = [
         plot_fatigue(result, out / "fatigue.png"),
         plot_effector(result, out / "effector.png"),

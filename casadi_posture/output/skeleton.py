@@ -16,12 +16,6 @@ AXES = {0: "x forward (m)", 1: "y left (m)", 2: "z up (m)"}
 Key = tuple[str, str]
 
 
-def is_planar(body: BodyModel) -> bool:
-    """Whether the body moves in one plane: every DOF axis parallel to the first."""
-    first = body.axis(body.dofs[0].name)
-    return all(np.linalg.norm(np.cross(first, body.axis(d.name))) < 1e-9 for d in body.dofs)
-
-
 def _bones(body: BodyModel) -> list[tuple[Key, Key]]:
     """Each segment that names its end landmarks from one to the other; every body frame
     (the world's included) that carries no such segment by its tree: its joint centre
@@ -87,7 +81,7 @@ class Skeleton:
         points, com = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps
         self.points = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
         self.com = np.asarray(com).T
-        self.planar = is_planar(body)
+        self.planar = body.planar
         spread = np.ptp(self.points.transpose(1, 0, 2).reshape(3, -1), axis=1)
         self.plane = tuple(sorted(int(i) for i in np.argsort(spread)[-2:]))
         self.depth = next(i for i in range(3) if i not in self.plane)
