@@ -100,7 +100,9 @@ def test_every_input_of_the_2dof_arm_against_finite_differences() -> None:
     assert result.limiting == "shoulder_flexors" and not result.flags
     kinds = {item.kind for item in result.inputs}
     assert kinds == {"load", "target", "body", "strength", "passive", "endurance"}
-    assert _check(problem, result) == len(result.inputs) == 34
+    assert _check(problem, result) == len(result.inputs) == 35
+    assert "tasks[0].elevation_deg" in {item.key for item in result.inputs}
+    assert "tasks[0].azimuth_deg" in result.left_out  # the arm moves in one plane
 
 
 def test_a_minimised_level_an_unreachable_dot_against_finite_differences() -> None:
@@ -110,8 +112,8 @@ def test_a_minimised_level_an_unreachable_dot_against_finite_differences() -> No
     result = sensitivity(problem)
     assert result.posture.minimised == 2 and result.posture.kept == (1,)
     keys = ["tasks[0].point_m[2]", "tasks[1].target_m[0]", "tasks[1].target_m[2]"]
-    keys += ["loads[0].mass_kg", "body.stature_m"]
-    assert _check(problem, result, keys) == 5
+    keys += ["tasks[0].elevation_deg", "loads[0].mass_kg", "body.stature_m"]
+    assert _check(problem, result, keys) == 6
 
 
 @pytest.mark.slow
@@ -126,6 +128,8 @@ def test_the_standing_body_against_finite_differences() -> None:
         "loads[0].mass_kg",
         "loads[0].force_N[0]",
         "tasks[2].point_m[2]",
+        "tasks[2].elevation_deg",
+        "tasks[2].azimuth_deg",
         "tasks[3].target_m[0]",
         "tasks[4].reference_deg.lumbar_rotation",
         "posture_deg.shoulder_flexion_r",
@@ -181,7 +185,7 @@ def test_the_command_writes_its_table_json_csv_and_tornado(tmp_path) -> None:
     assert "loads[0].mass_kg" in done.output and "body.stature_m" not in done.output
     data = json.loads((out / "sensitivity.json").read_text())
     assert data["task"]["limiting"] == "shoulder_flexors"
-    assert len(data["inputs"]) == 34 and len(data["groups"]) == 4
+    assert len(data["inputs"]) == 35 and len(data["groups"]) == 4
     values = [r["d_endurance_min_per_unit"] for r in data["task"]["ranked"]]
     assert all(np.isfinite(values))
     assert (out / "tornado.png").stat().st_size > 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -80,14 +81,15 @@ class Line(Task):
     def targets(self) -> np.ndarray:
         return np.array(self.point, dtype=float)
 
+    def helper_axis(self) -> int:
+        """The world axis most nearly normal to the line, which :func:`normal_rows` starts
+        from (kept when the direction changes a little, so the rows change smoothly)."""
+        return int(np.argmin(np.abs(np.asarray(self.direction, dtype=float))))
+
     def normal_basis(self) -> np.ndarray:
         """2×3 orthonormal rows spanning the plane normal to the line."""
-        d = np.asarray(self.direction, dtype=float)
-        d = d / np.linalg.norm(d)
-        helper = np.eye(3)[int(np.argmin(np.abs(d)))]
-        n1 = helper - helper.dot(d) * d
-        n1 /= np.linalg.norm(n1)
-        return np.vstack([n1, np.cross(d, n1)])
+        rows = normal_rows(ca.DM(self.direction), self.helper_axis())
+        return np.array(rows, dtype=float)
 
     def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
         return ca.DM(self.normal_basis()) @ (body.landmark(self.effector) - p)
@@ -229,8 +231,28 @@ def line_direction(spec: LineTask) -> tuple[float, float, float]:
     """The direction of a line task, from ``direction`` or elevation/azimuth [deg]."""
     if spec.direction is not None:
         return tuple(spec.direction)
-    el, az = math.radians(spec.elevation_deg), math.radians(spec.azimuth_deg or 0.0)
-    return (math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
+    return direction_at(math.radians(spec.elevation_deg), math.radians(spec.azimuth_deg or 0.0))
+
+
+def direction_at(elevation: Any, azimuth: Any) -> tuple[Any, Any, Any]:
+    """The unit vector at ``elevation`` above the forward (x) horizontal, turned by
+    ``azimuth`` about z [rad]: floats, or CasADi expressions of symbolic angles."""
+    return (
+        ca.cos(elevation) * ca.cos(azimuth),
+        ca.cos(elevation) * ca.sin(azimuth),
+        ca.sin(elevation),
+    )
+
+
+def normal_rows(direction: ca.DM | ca.SX, helper: int) -> ca.DM | ca.SX:
+    """2×3 orthonormal rows spanning the plane normal to ``direction`` (3×1, any length),
+    the first from world axis ``helper`` with its part along the line removed, the second
+    their cross product; numbers or CasADi expressions alike."""
+    d = direction / ca.norm_2(direction)
+    axis = ca.DM.eye(3)[:, helper]
+    n1 = axis - ca.dot(axis, d) * d
+    n1 = n1 / ca.norm_2(n1)
+    return ca.horzcat(n1, ca.cross(d, n1)).T
 
 
 def _segment_dof(name: str, body: BodyModel) -> str | None:

@@ -35,7 +35,16 @@ from casadi_posture.body.loads import LOAD_PARAMETERS, pack
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.data.parameters import Parameter
 from casadi_posture.ik.hierarchy import TaskHierarchy
-from casadi_posture.ik.tasks import CentreOfMass, Gaze, JointReference, Line, Plane, Position
+from casadi_posture.ik.tasks import (
+    CentreOfMass,
+    Gaze,
+    JointReference,
+    Line,
+    Plane,
+    Position,
+    direction_at,
+    normal_rows,
+)
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.static import SCHEDULE_NOTE
 
@@ -219,7 +228,9 @@ class ParametricProblem:
         out = []
         for level in hierarchy.levels:
             rows = [
-                task.residual(self.body, self._targets(task, specs.index(task.name)))
+                self._line(task, specs.index(task.name))
+                if isinstance(task, Line)
+                else task.residual(self.body, self._targets(task, specs.index(task.name)))
                 for task in level
             ]
             out.append(ca.vertcat(*rows))
@@ -230,7 +241,7 @@ class ParametricProblem:
         fixed = ca.DM(task.targets())
         if isinstance(task, Position | Gaze):
             return self._point(f"tasks[{i}].target_m", task.target)
-        if isinstance(task, Line | Plane):
+        if isinstance(task, Plane):
             return self._point(f"tasks[{i}].point_m", task.point)
         if isinstance(task, JointReference):
             return ca.vertcat(
@@ -245,6 +256,32 @@ class ParametricProblem:
         if fixed.numel():
             self.left_out.setdefault(f"tasks[{i}]", f"the {task.name} task's target")
         return fixed
+
+    def _line(self, task: Line, i: int) -> ca.SX:
+        """A line task's residual [m] with its point and its elevation as inputs, and its
+        azimuth for a body that does not move in one plane (a line turned out of that
+        plane meets it in one point: the posture would jump there, with no derivative)."""
+        spec = self.problem.spec.tasks[i]
+        point = self._point(f"tasks[{i}].point_m", task.point)
+        if spec.elevation_deg is None:
+            self.left_out.setdefault(
+                f"tasks[{i}].direction", "a direction vector (give elevation_deg instead)"
+            )
+            return task.residual(self.body, point)
+        to_rad = math.pi / 180.0
+        azimuth = spec.azimuth_deg or 0.0
+        elevation = self._input(f"tasks[{i}].elevation_deg", spec.elevation_deg, "deg", "target")
+        if self.problem.body.planar:
+            self.left_out.setdefault(
+                f"tasks[{i}].azimuth_deg",
+                "the body moves in one plane, which a line turned out of it meets in one point",
+            )
+            turn = azimuth * to_rad
+        else:
+            turn = self._input(f"tasks[{i}].azimuth_deg", azimuth, "deg", "target") * to_rad
+        direction = ca.vertcat(*direction_at(elevation * to_rad, turn))
+        rows = normal_rows(direction, task.helper_axis())
+        return rows @ (self.body.landmark(task.effector) - point)
 
     def _point(self, key: str, point: tuple[float, float, float]) -> ca.SX:
         return ca.vertcat(*[self._input(f"{key}[{k}]", point[k], "m", "target") for k in range(3)])
