@@ -141,6 +141,16 @@ def test_the_standing_body_against_finite_differences() -> None:
 
 
 @pytest.mark.slow
+def test_an_orientation_tasks_angles_against_finite_differences() -> None:
+    """The drill held pointing up (roll, pitch, yaw 0, 180, 0 deg) on the 29-DOF body."""
+    problem = cp.load("problems/standing_overhead_drill.toml")
+    result = sensitivity(problem)
+    assert result.posture.dq is not None and not result.flags and not result.left_out
+    keys = [f"tasks[3].target_rpy_deg[{k}]" for k in range(3)]
+    assert _check(problem, result, keys) == len(keys)
+
+
+@pytest.mark.slow
 def test_the_seat_height_of_the_upper_body_against_finite_differences() -> None:
     problem = cp.load("problems/seated_assembly.toml")
     result = sensitivity(problem)

@@ -220,10 +220,15 @@ class JointReference(Task):
 
 def rotation_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """Rz(yaw)·Ry(pitch)·Rx(roll) [rad]."""
-    cr, sr, cp, sp, cy, sy = (f(a) for a in (roll, pitch, yaw) for f in (math.cos, math.sin))
-    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
-    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return np.array(rpy_matrix(roll, pitch, yaw), dtype=float)
+
+
+def rpy_matrix(roll: Any, pitch: Any, yaw: Any) -> ca.DM | ca.SX:
+    """Rz(yaw)·Ry(pitch)·Rx(roll) [rad] of numbers or CasADi expressions."""
+    cr, sr, cp, sp, cy, sy = (f(a) for a in (roll, pitch, yaw) for f in (ca.cos, ca.sin))
+    rx = ca.blockcat([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = ca.blockcat([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = ca.blockcat([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
     return rz @ ry @ rx
 
 

@@ -40,10 +40,12 @@ from casadi_posture.ik.tasks import (
     Gaze,
     JointReference,
     Line,
+    Orientation,
     Plane,
     Position,
     direction_at,
     normal_rows,
+    rpy_matrix,
 )
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.static import SCHEDULE_NOTE
@@ -253,6 +255,14 @@ class ParametricProblem:
             )
         if isinstance(task, CentreOfMass):
             return self._centre_of_mass(task, i)
+        if isinstance(task, Orientation):
+            angles = self.problem.spec.tasks[i].target_rpy_deg
+            roll, pitch, yaw = (
+                self._input(f"tasks[{i}].target_rpy_deg[{k}]", a, "deg", "target")
+                * (math.pi / 180.0)
+                for k, a in enumerate(angles)
+            )
+            return ca.reshape(rpy_matrix(roll, pitch, yaw), 9, 1)  # column-major, as targets()
         if fixed.numel():
             self.left_out.setdefault(f"tasks[{i}]", f"the {task.name} task's target")
         return fixed
