@@ -116,9 +116,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "constraint_blocked_events": sum(e.kind == "constraint_blocked" for e in result.events),
         "keep_levels": result.settings.keep_levels,
         "schedule": schedule_summary(result),
-        "balance_margin_min_m": None
-        if tl.balance is None or not tl.balance[1].size
-        else float(tl.balance[1].min()),
+        "balance_margin_min_m": balance_margin_min(result),
         "flags": flags(result),
         "solver_statistics": {
             "steps": int(tl.time.size),
@@ -200,19 +198,33 @@ def flags(result: SimulationResult) -> list[str]:
             f"{result.level_units[0]}); "
             "out of the body's reach or blocked by a joint limit"
         )
-    start_over = [e for e in result.events if e.kind == "over_strength" and e.time_s == 0.0]
+    start_over = over_strength_at_start(result)
     if start_over:
-        names = ", ".join(e.half_joint for e in start_over)
+        names = ", ".join(start_over)
         out.append(f"over strength at the start ({names}): the posture cannot be held at all")
     if result.ik_failures:
         out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
-    if tl.balance is not None and tl.balance[1].size and tl.balance[1].min() < 0:
+    margin = balance_margin_min(result)
+    if margin is not None and margin < 0:
         lost = tl.time[np.argmax(tl.balance[1] < 0)]
         out.append(
             f"balance lost at {lost:g} s: the centre of mass leaves the support polygon "
-            f"by {-tl.balance[1].min():.3g} m (see balance_margin_m in timeline.csv)"
+            f"by {-margin:.3g} m (see balance_margin_m in timeline.csv)"
         )
     return out
+
+
+def over_strength_at_start(result: SimulationResult) -> list[str]:
+    """The groups over their strength at the run's first step."""
+    return [e.half_joint for e in result.events if e.kind == "over_strength" and e.time_s == 0]
+
+
+def balance_margin_min(result: SimulationResult) -> float | None:
+    """The run's smallest balance margin [m]; None without a balance task (or a step)."""
+    balance = result.timeline.balance
+    if balance is None or not balance[1].size:
+        return None
+    return float(balance[1].min())
 
 
 def _recoveries(result: SimulationResult) -> list[dict[str, Any]]:

@@ -31,7 +31,11 @@ from casadi_posture import interrupt
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.plain import dumps
-from casadi_posture.output.results import write_table
+from casadi_posture.output.results import (
+    balance_margin_min,
+    over_strength_at_start,
+    write_table,
+)
 from casadi_posture.output.schedule_plots import plot_duty_vs_rest, plot_runs
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.simulation import SimulationResult, simulate, whole_steps
@@ -211,12 +215,8 @@ def duty_cycle(
                 None if crossing is None else crossing.half_joint,
                 float(result.timeline.fatigue.max(initial=0.0)),
                 result.ik_failures,
-                [
-                    e.half_joint
-                    for e in result.events
-                    if e.kind == "over_strength" and e.time_s == 0
-                ],
-                _smallest_margin(result),
+                over_strength_at_start(result),
+                balance_margin_min(result),
                 result.wall_time_s,
             )
         )
@@ -330,14 +330,6 @@ def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
             )
         )
     return paths
-
-
-def _smallest_margin(result: SimulationResult) -> float | None:
-    """The run's smallest balance margin [m]; None without a balance task."""
-    balance = result.timeline.balance
-    if balance is None or not balance[1].size:
-        return None
-    return float(balance[1].min())
 
 
 def _t_on(result: SimulationResult) -> str:

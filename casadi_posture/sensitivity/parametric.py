@@ -43,6 +43,7 @@ from casadi_posture.ik.tasks import (
     Orientation,
     Plane,
     Position,
+    Task,
     direction_at,
     normal_rows,
     rpy_matrix,
@@ -229,14 +230,15 @@ class ParametricProblem:
         specs = [t.name for t in self.problem.spec.tasks]
         out = []
         for level in hierarchy.levels:
-            rows = [
-                self._line(task, specs.index(task.name))
-                if isinstance(task, Line)
-                else task.residual(self.body, self._targets(task, specs.index(task.name)))
-                for task in level
-            ]
+            rows = [self._residual(task, specs.index(task.name)) for task in level]
             out.append(ca.vertcat(*rows))
         return out
+
+    def _residual(self, task: Task, i: int) -> ca.SX:
+        """Task ``i``'s residual with its targets as inputs (a line's direction too)."""
+        if isinstance(task, Line):
+            return self._line(task, i)
+        return task.residual(self.body, self._targets(task, i))
 
     def _targets(self, task: object, i: int) -> ca.SX:
         """A task's parameter vector (``Task.targets``) with its targets as inputs."""
