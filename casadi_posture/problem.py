@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ValidationError
 
+from casadi_posture.biomech.comfort import comfort_measure
 from casadi_posture.biomech.endurance import endurance_model
 from casadi_posture.biomech.fatigue import FatigueModel, fatigue_model
 from casadi_posture.biomech.passive import (
@@ -44,6 +45,7 @@ from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import tasks_from_specs
 from casadi_posture.spec.overrides import apply
 from casadi_posture.spec.schema import (
+    ComfortTask,
     ComTask,
     ExponentialPassiveSpec,
     FeetTask,
@@ -97,7 +99,9 @@ class Problem:
         """The problem's tasks grouped into priority levels (built once per call)."""
         if not self.spec.tasks:
             raise ProblemError(self.path, "tasks", MISSING, "at least one task to solve")
-        tasks = tasks_from_specs(self.spec.tasks, self.body, self.loads, self.posture)
+        tasks = tasks_from_specs(
+            self.spec.tasks, self.body, self.loads, self.posture, self.passive, self.strength
+        )
         return TaskHierarchy(self.body, tasks)
 
     def torque_model(self) -> TorqueModel:
@@ -548,12 +552,43 @@ def _check_tasks(body: BodyModel, spec: ProblemSpec, path: Path) -> None:
         elif isinstance(task, PostureTask):
             for dof in task.reference_deg:
                 _dof_index(body, dof, f"{key}.reference_deg.{dof}", path)
+        elif isinstance(task, ComfortTask):
+            _check_comfort(body, spec, i, path)
         elif isinstance(task, FeetTask) and not any(f.dof for f in body.feet):
             raise ProblemError(path, f"{key}.kind", "feet", "a body standing on two feet")
-        elif not isinstance(task, ComTask | FeetTask) and task.effector not in body.landmarks:
+        elif (
+            not isinstance(task, ComTask | FeetTask | ComfortTask)
+            and task.effector not in body.landmarks
+        ):
             raise ProblemError(
                 path, f"{key}.effector", task.effector, f"one of {sorted(body.landmarks)}"
             )
+
+
+def _check_comfort(body: BodyModel, spec: ProblemSpec, i: int, path: Path) -> None:
+    """A comfort task is alone at the lowest priority (it is a criterion over what every task
+    leaves free, not a task beside others) and its measure resolves on this body."""
+    task = spec.tasks[i]
+    lowest = max(t.priority for t in spec.tasks)
+    others = [t.name for t in spec.tasks if t.priority == task.priority and t is not task]
+    if task.priority != lowest or others:
+        expected = (
+            f"a priority below every other task's, alone at its level (lowest other: {lowest})"
+            if task.priority != lowest
+            else f"a level of its own (shared with {others})"
+        )
+        raise ProblemError(path, f"tasks[{i}].priority", task.priority, expected)
+    try:
+        comfort_measure(
+            body,
+            task.measure,
+            weights=task.weights,
+            joint_weights=task.joint_weights,
+            neutral_deg=task.neutral_deg,
+            key=f"tasks[{i}]",
+        )
+    except ProblemError as error:
+        raise ProblemError(path, error.key, error.value, error.expected) from None
 
 
 def _degrees(angle: Any, key: str, name: str, path: Path) -> float:

@@ -1,7 +1,7 @@
 """The package's layers: every import runs downward (or within one group), so the tree reads
 bottom-up like the data's path: problem-file specs, the body (the built-in models are trees
-a file could hold), biomechanics and IK, the resolved problem, the fatigue-driven
-adjustment, the simulation, output, runs, the CLI."""
+a file could hold), biomechanics, IK (whose comfort level counts torques and strength), the
+resolved problem, the fatigue-driven adjustment, the simulation, output, runs, the CLI."""
 
 from __future__ import annotations
 
@@ -19,21 +19,21 @@ FLOORS = {
     "spec": 2,
     "body": 3,
     "biomech": 4,
-    "ik": 4,
-    "problem": 5,
-    "static": 6,
-    "adjustment": 6,
-    "simulation": 7,
-    "description": 7,
-    "sensitivity": 7,
-    "design": 7,
-    "output": 8,
-    "runs": 9,
-    "api": 10,
-    "cli": 11,
-    "console": 12,
-    "__init__": 13,
-    "__main__": 13,
+    "ik": 5,
+    "problem": 6,
+    "static": 7,
+    "adjustment": 7,
+    "simulation": 8,
+    "description": 8,
+    "sensitivity": 8,
+    "design": 8,
+    "output": 9,
+    "runs": 10,
+    "api": 11,
+    "cli": 12,
+    "console": 13,
+    "__init__": 14,
+    "__main__": 14,
 }
 
 

@@ -105,7 +105,7 @@ def test_solve_notes_the_dofs_the_tasks_leave_free(tmp_path: Path) -> None:
     from casadi_posture.cli import main
 
     text = (PROBLEMS / "standing_shelf_box.toml").read_text()
-    cut = text.index('[[tasks]]\nname = "upright"')
+    cut = text.index('[[tasks]]\nname = "comfort"')
     loose = tmp_path / "loose.toml"
     loose.write_text(text[:cut] + text[text.index("[fatigue]") :])
     notes = {

@@ -9,16 +9,21 @@ a linearised solver may try to remove in one iteration, in the task's units.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from casadi_posture.body.loads import Load
+from casadi_posture.biomech.comfort import ComfortMeasure, comfort_measure
+from casadi_posture.biomech.passive import PassiveTorque
+from casadi_posture.biomech.strength import Strength
+from casadi_posture.biomech.torques import torque_expressions
+from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.spec.schema import (
+    ComfortTask,
     ComTask,
     FeetTask,
     GazeTask,
@@ -218,6 +223,48 @@ class JointReference(Task):
         return ca.vertcat(*[body.q[body.index[d]] for d in self.dofs]) - p
 
 
+@dataclass(frozen=True)
+class Comfort(Task):
+    """How uncomfortable the posture is (biomech/comfort.py), the residual whose squared norm
+    is the ``measure``: the criterion that settles what the levels above leave free, at the
+    lowest level. Its parameters are the neutral posture [rad] and, when the measure counts
+    effort, the loads (:func:`pack`) and each half-joint's effort weight c_g (1 by default;
+    1 + k·F_g under the whole-body fatigue adjustment), so neither rebuilds a solver."""
+
+    measure: ComfortMeasure
+    loads: tuple[Load, ...] = ()
+    passive: Mapping[str, PassiveTorque] = field(default_factory=dict)
+    strength: Mapping[str, Strength] = field(default_factory=dict)
+
+    step_limit = ANGULAR_STEP
+    unit = "1"
+
+    def targets(self) -> np.ndarray:
+        if not self.measure.effort:
+            return np.array(self.measure.neutral, dtype=float)
+        weights = np.ones(2 * self.measure.neutral.size)
+        return np.concatenate([self.measure.neutral, pack(self.loads), weights])
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        n = body.n
+        if not self.measure.effort:
+            return self.measure.rows(body, body.q, p)
+        loads = p[n : n + LOAD_PARAMETERS * len(self.loads)]
+        _, _, active, strength = torque_expressions(
+            body, self.loads, loads, self.passive, self.strength
+        )
+        weights = p[n + LOAD_PARAMETERS * len(self.loads) :]
+        return self.measure.rows(body, body.q, p[:n], active, strength, weights)
+
+    def effort_weights(self) -> slice:
+        """Where the effort weights c_g lie in :meth:`targets` (an empty slice without effort)."""
+        n = self.measure.neutral.size
+        if not self.measure.effort:
+            return slice(n, n)
+        start = n + LOAD_PARAMETERS * len(self.loads)
+        return slice(start, start + 2 * n)
+
+
 def rotation_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """Rz(yaw)·Ry(pitch)·Rx(roll) [rad]."""
     return np.array(rpy_matrix(roll, pitch, yaw), dtype=float)
@@ -265,12 +312,35 @@ def _segment_dof(name: str, body: BodyModel) -> str | None:
 
 
 def task_from_spec(
-    spec: TaskSpec, body: BodyModel, loads: Sequence[Load] = (), posture: np.ndarray | None = None
+    spec: TaskSpec,
+    body: BodyModel,
+    loads: Sequence[Load] = (),
+    posture: np.ndarray | None = None,
+    passive: Mapping[str, PassiveTorque] | None = None,
+    strength: Mapping[str, Strength] | None = None,
 ) -> Task:
     """The task object of a validated problem-file task; a centre-of-mass task counts the
     masses of the held ``loads`` and without a target keeps the centre of mass where it is
-    at ``posture`` [rad]."""
+    at ``posture`` [rad]; a comfort task's effort counts the ``loads`` with the body's
+    ``passive`` torques and ``strength``."""
     base = {"name": spec.name, "priority": spec.priority}
+    if isinstance(spec, ComfortTask):
+        measure = comfort_measure(
+            body,
+            spec.measure,
+            weights=spec.weights,
+            joint_weights=spec.joint_weights,
+            neutral_deg=spec.neutral_deg,
+        )
+        if measure.effort and (passive is None or strength is None):
+            raise ValueError("a comfort task with effort needs the passive torques and strength")
+        return Comfort(
+            **base,
+            measure=measure,
+            loads=tuple(loads),
+            passive=passive or {},
+            strength=strength or {},
+        )
     if isinstance(spec, PositionTask):
         return Position(**base, effector=spec.effector, target=tuple(spec.target_m))
     if isinstance(spec, LineTask):
@@ -329,5 +399,7 @@ def tasks_from_specs(
     body: BodyModel,
     loads: Sequence[Load] = (),
     posture: np.ndarray | None = None,
+    passive: Mapping[str, PassiveTorque] | None = None,
+    strength: Mapping[str, Strength] | None = None,
 ) -> list[Task]:
-    return [task_from_spec(s, body, loads, posture) for s in specs]
+    return [task_from_spec(s, body, loads, posture, passive, strength) for s in specs]

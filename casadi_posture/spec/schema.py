@@ -37,6 +37,7 @@ MAX_STEPS = 100_000
 MAX_SOLVER_ITERATIONS = 100_000
 MIN_TOLERANCE, MAX_TOLERANCE = 1e-14, 1e-2
 MAX_DIRECTION = 1e6
+MAX_COMFORT_WEIGHT = 1e6
 
 
 def _between(lo: float, hi: float) -> Field:
@@ -63,6 +64,7 @@ PassiveMagnitude = Annotated[float, _between(0.0, MAX_PASSIVE_NM)]
 PassiveRate = Annotated[float, _between(0.0, MAX_PASSIVE_RATE_PER_RAD)]
 StrengthValue = Annotated[float, _between(MIN_STRENGTH_NM, MAX_STRENGTH_NM)]
 Priority = Annotated[int, Field(ge=1, le=1000)]
+ComfortWeight = Annotated[float, _between(0.0, MAX_COMFORT_WEIGHT)]
 
 
 class Strict(BaseModel):
@@ -394,6 +396,20 @@ class PostureTask(_Task):
     reference_deg: dict[str, Angle]
 
 
+class ComfortTask(_Task):
+    """How uncomfortable the posture is, minimised at the lowest level to settle what the
+    tasks above leave free (docs/comfort.md): a named ``measure``, the weights of its terms,
+    and per DOF the joint weights and neutral angles [deg] that replace the shipped ones."""
+
+    kind: Literal["comfort"]
+    measure: Literal["joint_displacement", "discomfort", "discomfort_effort"] = (
+        "discomfort_effort"
+    )
+    weights: dict[Literal["displacement", "limits", "effort"], ComfortWeight] = {}
+    joint_weights: dict[str, ComfortWeight] = {}
+    neutral_deg: dict[str, Angle] = {}
+
+
 Task = Annotated[
     PositionTask
     | LineTask
@@ -402,7 +418,8 @@ Task = Annotated[
     | ComTask
     | FeetTask
     | GazeTask
-    | PostureTask,
+    | PostureTask
+    | ComfortTask,
     Field(discriminator="kind"),
 ]
 
