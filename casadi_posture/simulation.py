@@ -18,23 +18,31 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import casadi as ca
 import numpy as np
 
 from casadi_posture import interrupt
-from casadi_posture.adjustment.constraint import ConstraintSettings, Event, FatigueConstraint
+from casadi_posture.adjustment.constraint import (
+    Adjustment,
+    ConstraintSettings,
+    Event,
+    FatigueConstraint,
+)
 from casadi_posture.adjustment.reduced_torque import Goal
+from casadi_posture.adjustment.whole_body import WholeBodyAdjustment
 from casadi_posture.biomech.torques import Torques
 from casadi_posture.body.support import Support
+from casadi_posture.data import parameters
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import SOLVER_NAMES, Solver, cached_solver
-from casadi_posture.ik.tasks import Line, Task
+from casadi_posture.ik.tasks import Comfort, Line, Task, tasks_from_specs
 from casadi_posture.problem import Problem
+from casadi_posture.spec.schema import ComfortTask
 from casadi_posture.static import STRENGTH_PCT_MVC
 
 #: What a step of the timeline was: the tasks held, or a rest with the load put down.
@@ -124,7 +132,36 @@ def constraint_settings(problem: Problem) -> ConstraintSettings:
         max_step=math.radians(f.max_step_deg),
         alpha=f.alpha_rad_per_Nm2,
         keep_levels=f.keep_levels,
+        adjustment=adjustment(problem),
+        fatigue_weight=fatigue_weight(problem),
     )
+
+
+def adjustment(problem: Problem) -> Adjustment:
+    """The problem's fatigue adjustment: the file's, else the paper's. (The whole-body one is
+    chosen per file for now: on the shipped shelf its equal joint weights let a symmetric
+    hold twist the trunk 42°; docs/comfort.md.)"""
+    return problem.spec.fatigue.adjustment or "paper"
+
+
+def fatigue_weight(problem: Problem) -> float:
+    """k of the whole-body adjustment's effort weights 1 + k·F: the file's, else the comfort
+    measure's shipped value."""
+    given = problem.spec.fatigue.fatigue_weight
+    return float(parameters.value("comfort", "fatigue_weight") if given is None else given)
+
+
+def _effort_comfort(problem: Problem) -> Comfort | None:
+    """The problem's comfort task if it counts effort."""
+    tasks = tasks_from_specs(
+        [t for t in problem.spec.tasks if isinstance(t, ComfortTask)],
+        problem.body,
+        problem.loads,
+        problem.posture,
+        problem.passive,
+        problem.strength,
+    )
+    return next((t for t in tasks if isinstance(t, Comfort) and t.measure.effort), None)
 
 
 @dataclass(frozen=True)
@@ -237,7 +274,21 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
             settings.keep_levels,
             f"at most the number of priority levels ({hierarchy.depth})",
         )
-    constraint = FatigueConstraint(body, problem.passive, settings, hierarchy)
+    whole_body = None
+    if settings.adjustment == "whole_body":
+        if _effort_comfort(problem) is None:
+            raise ProblemError(
+                problem.path,
+                "fatigue.adjustment",
+                "whole_body",
+                "a problem whose lowest level is a comfort task counting effort "
+                "(kind = 'comfort', measure = 'discomfort_effort'), or adjustment = 'paper'",
+            )
+        whole_body = WholeBodyAdjustment(
+            torque_model, hierarchy, k=settings.fatigue_weight, keep_levels=settings.keep_levels
+        )
+        kept_solvers = _Solvers(name, problem, whole_body.kept_hierarchy)
+    constraint = FatigueConstraint(body, problem.passive, settings, hierarchy, whole_body)
     effector, line = _tracked(hierarchy)
     position = ca.Function("effector", [body.q], [body.landmark(effector)])
     names = [h.name for h in body.half_joints]
@@ -247,9 +298,9 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
     schedule = Schedule.of(problem)
     record = _Recorder()
     events: list[Event] = []
-    state, q, torques = fatigue.initial_state(), problem.posture.copy(), None
+    state, q, torques, levels = fatigue.initial_state(), problem.posture.copy(), None, None
     ik_time, failures, fallbacks, iterations, held = 0.0, 0, 0, 0, True
-    result, before, reused = None, None, 0
+    result, before, reused, unreduced = None, None, 0, None
     stop: Stop = "completed"
     for step in range(spec.simulation.steps):
         now = step * dt
@@ -265,8 +316,21 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
             record.add(**_row(position, constraint, q, None, loads, levels, None, None))
             continue
         was_blocked = constraint.blocked
-        planned = constraint.hyperplane(q, torques) if torques is not None else None
+        planned = constraint.hyperplane(q, torques, levels) if torques is not None else None
         inequality, goal = planned if planned is not None else (None, None)
+        if goal is not None and inequality is None and unreduced != constraint.owner:
+            unreduced = constraint.owner
+            events.append(
+                Event(
+                    now,
+                    "no_reduction",
+                    names[constraint.owner],
+                    f"{goal.case}: no posture the constraint could move to carries less; "
+                    "the posture stays",
+                )
+            )
+        if constraint.owner is None:
+            unreduced = None
         if constraint.blocked and not was_blocked and constraint.owner is not None:
             events.append(
                 Event(
@@ -282,7 +346,11 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
         if unchanged:
             reused += 1
         else:
-            result, spent, detail = _solve_step(solvers, q, inequality, retry=held)
+            if whole_body is not None and constraint.owner is not None:
+                result, spent, detail = _solve_step(kept_solvers, q, inequality, retry=held)
+                result = replace(result, residuals=hierarchy.residual_norms(result.q))
+            else:
+                result, spent, detail = _solve_step(solvers, q, inequality, retry=held)
             iterations += spent
             if detail:
                 events.append(Event(now, "solver_fallback", "", detail))

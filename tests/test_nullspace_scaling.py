@@ -357,7 +357,8 @@ def test_the_standing_shelf_reaches_the_hands_level_as_the_lexicographic_solver(
     a, b = ns.solve(start), lx.solve(start)
     assert a.success, a.status
     assert a.residuals[0] < 1e-9 and a.residuals[1] < 1e-9
-    assert b.residuals[0] < 1e-5 and b.residuals[1] < 1e-4  # IPOPT: achieved, not exact
+    # IPOPT from upright: near the level, not exact (2.9e-5 to 1.02e-4 m across installs)
+    assert b.residuals[0] < 1e-5 and b.residuals[1] < 2e-4
     assert a.residuals[2] == pytest.approx(b.residuals[2], abs=1e-4)
     assert a.residuals[2] == pytest.approx(0.08964, abs=1e-5)
     assert a.iterations < 100

@@ -118,7 +118,8 @@ def test_a_minimised_level_an_unreachable_dot_against_finite_differences() -> No
 
 @pytest.mark.slow
 def test_the_standing_body_against_finite_differences() -> None:
-    """29 DOF, four levels (feet and balance, line, dot, upright): a sample of every kind."""
+    """29 DOF, four levels (feet, balance and the protocol's plane, line, dot, comfort): a
+    sample of every kind."""
     problem = cp.load("problems/standing_wall_horizontal.toml")
     result = sensitivity(problem)
     assert result.posture.dq is not None and not result.flags
@@ -127,11 +128,11 @@ def test_the_standing_body_against_finite_differences() -> None:
         "body.mass_kg",
         "loads[0].mass_kg",
         "loads[0].force_N[0]",
-        "tasks[2].point_m[2]",
-        "tasks[2].elevation_deg",
-        "tasks[2].azimuth_deg",
-        "tasks[3].target_m[0]",
-        "tasks[4].reference_deg.lumbar_rotation",
+        "tasks[3].point_m[2]",
+        "tasks[3].elevation_deg",
+        "tasks[3].azimuth_deg",
+        "tasks[4].target_m[0]",
+        "tasks[2].reference_deg.lumbar_rotation",
         "posture_deg.shoulder_flexion_r",
         "body.half_joints.shoulder_flexors_r.strength_Nm",
         "joints.shoulder_flexion_r.passive.k3",
@@ -145,7 +146,8 @@ def test_an_orientation_tasks_angles_against_finite_differences() -> None:
     """The drill held pointing up (roll, pitch, yaw 0, 180, 0 deg) on the 29-DOF body."""
     problem = cp.load("problems/standing_overhead_drill.toml")
     result = sensitivity(problem)
-    assert result.posture.dq is not None and not result.flags and not result.left_out
+    assert result.posture.dq is not None and not result.flags
+    assert list(result.left_out) == ["tasks[4]"]  # the comfort level's neutral and weights
     keys = [f"tasks[3].target_rpy_deg[{k}]" for k in range(3)]
     assert _check(problem, result, keys) == len(keys)
 
@@ -175,14 +177,19 @@ def test_elasticities_of_manenica_have_closed_forms() -> None:
 
 
 def test_a_posture_the_tasks_leave_free_is_flagged() -> None:
-    """Without its posture task the standing body's trunk and legs are undetermined: the
-    derivatives hold the posture fixed and say so."""
-    problem = cp.load("problems/standing_wall_horizontal.toml")
-    tasks = [t for t in problem.data["tasks"] if t["kind"] != "posture"]
+    """Without its comfort level the standing body's trunk and legs are undetermined: the
+    derivatives hold the posture fixed and say so. With it, a symmetric two-hand hold is
+    determined and not flagged."""
+    problem = cp.load("problems/standing_shelf_box.toml")
+    tasks = [t for t in problem.data["tasks"] if t["kind"] != "comfort"]
     free = problem_from_data({**problem.data, "tasks": tasks}, problem.path)
     result = sensitivity(free)
     assert result.posture.dq is None
     assert any("hold the posture fixed" in f for f in result.flags)
+    determined = sensitivity(problem)
+    assert determined.posture.dq is not None
+    assert not any("hold the posture fixed" in f for f in determined.flags)
+    assert [f for f in determined.flags if "ties with" in f]  # the two shoulders, one load
 
 
 def test_the_command_writes_its_table_json_csv_and_tornado(tmp_path) -> None:

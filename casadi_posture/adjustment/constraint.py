@@ -16,6 +16,14 @@ term's direction instead, the owner sprang back from its goal to the lower task'
 and out again; with the α term in the offset, the plane drifted a little every step and
 took the top task with it).
 
+When the algorithm keeps the owner's angle (no angle of its joint carries less active torque,
+"kept θc") and the α term has no direction, no plane is built: the goal is still reported,
+and the step keeps its posture.
+
+The whole-body adjustment (``adjustment = "whole_body"``, adjustment/whole_body.py) replaces
+the goal angle by the owner's load: its effort weights and its load bound come from there,
+with the same hysteresis and owner.
+
 The compatible constraint (our extension; ``keep_levels = N``): in the paper's
 experiment the subjects rest while keeping the wrist on the line, but the constraint,
 above every task, may break it. With N > 0, Δq is first projected onto the nullspace of
@@ -34,6 +42,7 @@ from typing import Literal
 import numpy as np
 
 from casadi_posture.adjustment.reduced_torque import Goal, JointState, Strategy, goal_angle
+from casadi_posture.adjustment.whole_body import WholeBodyAdjustment
 from casadi_posture.biomech.passive import PassiveTorque
 from casadi_posture.biomech.torques import Torques
 from casadi_posture.body.tree import BodyModel
@@ -59,14 +68,20 @@ EventKind = Literal[
     "exhausted",
     "solver_fallback",
     "constraint_blocked",
+    "no_reduction",
     "interrupted",
 ]
+
+#: The two fatigue adjustments: the paper's goal angle of the owner's joint, or the owner's
+#: load lowered over the whole body.
+Adjustment = Literal["paper", "whole_body"]
 
 
 @dataclass(frozen=True)
 class ConstraintSettings:
     """Thresholds (fatigue levels), strategy, R_min, ε_τ [N·m], β, Δq_max [rad], α
-    [rad/(N·m)²] of the fatigue-reducing constraint, and the priority levels it keeps."""
+    [rad/(N·m)²] of the fatigue-reducing constraint, the priority levels it keeps, the
+    ``adjustment`` and the whole-body adjustment's fatigue weight k."""
 
     fatigue_threshold: float = 0.8
     recovery_threshold: float = 0.5
@@ -77,6 +92,8 @@ class ConstraintSettings:
     max_step: float = math.radians(1.0)
     alpha: float = -1e-4
     keep_levels: int = 0
+    adjustment: Adjustment = "paper"
+    fatigue_weight: float = 10.0
 
 
 @dataclass(frozen=True)
@@ -97,6 +114,7 @@ class FatigueConstraint:
     passive: dict[str, PassiveTorque]
     settings: ConstraintSettings
     hierarchy: TaskHierarchy | None = None
+    whole_body: WholeBodyAdjustment | None = None
     fatigued: np.ndarray = field(init=False)
     owner: int | None = field(init=False, default=None)
     blocked: bool = field(init=False, default=False)
@@ -133,10 +151,19 @@ class FatigueConstraint:
             )
         return events
 
-    def hyperplane(self, q: np.ndarray, torques: Torques) -> tuple[Inequality, Goal] | None:
-        """The constraint aᵀq ≤ b for the next step and the goal of the owner's joint."""
+    def hyperplane(
+        self, q: np.ndarray, torques: Torques, levels: np.ndarray | None = None
+    ) -> tuple[Inequality | None, Goal] | None:
+        """The constraint aᵀq ≤ b for the next step (None: the posture stays) and the goal
+        (the owner's goal angle; under the whole-body adjustment the owner's load bound, each
+        group's effort weighed by its fatigue ``levels``, the goal angle the current one);
+        None without an owner."""
+        if self.whole_body is not None:
+            self.whole_body.weigh(None if self.owner is None else levels)
         if self.owner is None:
             return None
+        if self.whole_body is not None:
+            return self._whole_body(q)
         s = self.settings
         j = self.body.half_joints[self.owner].dof_index
         dof = self.body.dofs[j]
@@ -157,15 +184,34 @@ class FatigueConstraint:
             owner_step = abs(dq[j])
             dq = self._kept(q) @ dq
             self.blocked = owner_step > 0 and abs(dq[j]) < BLOCKED_FRACTION * owner_step
-        norm = float(np.linalg.norm(dq))
-        if abs(dq[j]) >= HOLD_FRACTION * s.max_step and norm > 0:
-            self._direction = -dq / norm
-            return Inequality(self._direction, float(self._direction @ (q + dq))), goal
-        if self._direction is None:
-            return None
         held = np.zeros_like(dq)
         held[j] = dq[j]
-        return Inequality(self._direction, float(self._direction @ (q + held))), goal
+        return self._plane(q, dq, abs(dq[j]), held), goal
+
+    def _whole_body(self, q: np.ndarray) -> tuple[Inequality | None, Goal]:
+        """The whole-body adjustment's load bound (whole_body.py) and what it does."""
+        assert self.whole_body is not None and self.owner is not None
+        inequality, load = self.whole_body.bound(q, self.owner)
+        half = self.body.half_joints[self.owner]
+        case = (
+            f"whole body: {half.name} at most {load:.2f} %MVC, effort weighed by fatigue, "
+            f"levels 1-{self.whole_body.kept} kept"
+        )
+        return inequality, Goal(float(q[half.dof_index]), case, ())
+
+    def _plane(
+        self, q: np.ndarray, dq: np.ndarray, step: float, held: np.ndarray
+    ) -> Inequality | None:
+        """a = -Δq/‖Δq‖, b = aᵀ(q + Δq) when the ``step`` [rad] that measures Δq is at least
+        ``HOLD_FRACTION`` of Δq_max; else the last plane's direction through q + ``held``
+        (None when there is none)."""
+        norm = float(np.linalg.norm(dq))
+        if step >= HOLD_FRACTION * self.settings.max_step and norm > 0:
+            self._direction = -dq / norm
+            return Inequality(self._direction, float(self._direction @ (q + dq)))
+        if self._direction is None:
+            return None
+        return Inequality(self._direction, float(self._direction @ (q + held)))
 
     def _kept(self, q: np.ndarray) -> np.ndarray:
         """Projector onto the joint motions that leave levels 1..keep_levels unchanged to first

@@ -47,11 +47,13 @@ class TaskHierarchy:
         self.p = ca.SX.sym("targets", self.targets.size)
         self.residuals: list[ca.SX] = []
         self.blocks: list[list[tuple[Task, slice]]] = []
+        self._offsets: dict[str, int] = {}
         offset = 0
         for level in self.levels:
             parts, blocks, row = [], [], 0
             for task in level:
                 size = task.targets().size
+                self._offsets[task.name] = offset
                 e = task.residual(body, self.p[offset : offset + size])
                 offset += size
                 parts.append(e)
@@ -69,6 +71,10 @@ class TaskHierarchy:
             [f"e{k + 1}" for k in range(len(self.levels))]
             + [f"J{k + 1}" for k in range(len(self.levels))],
         )
+
+    def offset(self, task: Task) -> int:
+        """Where ``task``'s parameters start in :attr:`targets`."""
+        return self._offsets[task.name]
 
     @property
     def depth(self) -> int:

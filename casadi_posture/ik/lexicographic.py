@@ -258,6 +258,9 @@ class LexicographicSolver:
                 "tol_du": SQP_DUAL_TOLERANCE,
                 "max_iter": SQP_MAX_ITERATIONS,
                 "max_iter_ls": 0,
+                # a first try whose failures IPOPT takes over: a full step that leaves the
+                # region where the comfort level's effort is finite is one of them
+                "show_eval_warnings": False,
             },
         )
 

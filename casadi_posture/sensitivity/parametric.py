@@ -37,6 +37,7 @@ from casadi_posture.data.parameters import Parameter
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import (
     CentreOfMass,
+    Comfort,
     Gaze,
     JointReference,
     Line,
@@ -235,9 +236,18 @@ class ParametricProblem:
         return out
 
     def _residual(self, task: Task, i: int) -> ca.SX:
-        """Task ``i``'s residual with its targets as inputs (a line's direction too)."""
+        """Task ``i``'s residual with its targets as inputs (a line's direction too); the
+        comfort level's effort on the torques and strengths of this graph."""
         if isinstance(task, Line):
             return self._line(task, i)
+        if isinstance(task, Comfort):
+            self.left_out.setdefault(
+                f"tasks[{i}]", "the comfort task's neutral posture and weights"
+            )
+            neutral = ca.DM(task.measure.neutral)
+            if not task.measure.effort:
+                return task.measure.rows(self.body, self.q, neutral)
+            return task.measure.rows(self.body, self.q, neutral, self.tau_act, self.strength)
         return task.residual(self.body, self._targets(task, i))
 
     def _targets(self, task: object, i: int) -> ca.SX:

@@ -402,9 +402,7 @@ class ComfortTask(_Task):
     and per DOF the joint weights and neutral angles [deg] that replace the shipped ones."""
 
     kind: Literal["comfort"]
-    measure: Literal["joint_displacement", "discomfort", "discomfort_effort"] = (
-        "discomfort_effort"
-    )
+    measure: Literal["joint_displacement", "discomfort", "discomfort_effort"] = "discomfort_effort"
     weights: dict[Literal["displacement", "limits", "effort"], ComfortWeight] = {}
     joint_weights: dict[str, ComfortWeight] = {}
     neutral_deg: dict[str, Angle] = {}
@@ -437,6 +435,8 @@ class FatigueSpec(Strict):
     max_step_deg: Annotated[float, Field(gt=0, le=30)] = 1.0
     alpha_rad_per_Nm2: Annotated[float, Field(ge=-1e-2, lt=0)] = -1e-4
     keep_levels: Annotated[int, Field(ge=0, le=1000)] = 0
+    adjustment: Literal["paper", "whole_body"] | None = None
+    fatigue_weight: Annotated[float, _between(0.0, 1000.0)] | None = None
 
     @model_validator(mode="after")
     def _thresholds(self) -> FatigueSpec:
