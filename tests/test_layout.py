@@ -15,6 +15,7 @@ FLOORS = {
     "errors": 0,
     "interrupt": 0,
     "frames": 0,
+    "compiled": 0,
     "data": 1,
     "spec": 2,
     "body": 3,

@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture.biomech.torques import TorqueModel
+from casadi_posture.compiled import Compiled
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
 from casadi_posture.ik.tasks import Comfort
 
@@ -59,12 +60,14 @@ class WholeBodyAdjustment:
         signs = np.array([h.sign for h in body.half_joints], dtype=float)
         active = ca.vertcat(*[torque_model.tau_act[h.dof_index] for h in body.half_joints])
         load = 100.0 * ca.DM(signs) * active / torque_model.strength
-        self._load = ca.Function(
-            "half_joint_load",
-            [body.q, torque_model.p],
-            [load, ca.jacobian(load, body.q)],
-            ["q", "loads"],
-            ["load", "load_jacobian"],
+        self._load = Compiled(
+            ca.Function(
+                "half_joint_load",
+                [body.q, torque_model.p],
+                [load, ca.densify(ca.jacobian(load, body.q))],
+                ["q", "loads"],
+                ["load", "load_jacobian"],
+            )
         )
         self._packed = torque_model.default_loads
 
@@ -77,9 +80,10 @@ class WholeBodyAdjustment:
     def bound(self, q: np.ndarray, owner: int) -> tuple[Inequality | None, float]:
         """The ``owner`` half-joint's load [%MVC] at ``q`` [rad] and the hard constraint that
         it does not rise, linearised there (None where the load does not depend on q)."""
-        load, jacobian = self._load(q, self._packed)
-        value = float(load[owner])
-        gradient = np.asarray(jacobian[owner, :], dtype=float).ravel()
+        out = self._load(q=q, loads=self._packed)
+        count = out["load"].size
+        value = float(out["load"][owner])
+        gradient = out["load_jacobian"].reshape((count, -1), order="F")[owner].copy()
         norm = float(np.linalg.norm(gradient))
         if norm <= FLAT_GRADIENT:
             return None, value

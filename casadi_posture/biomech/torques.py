@@ -21,6 +21,7 @@ from casadi_posture.biomech.strength import Strength
 from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
 from casadi_posture.body.support import reaction_torque
 from casadi_posture.body.tree import BodyModel
+from casadi_posture.compiled import Compiled
 
 
 @dataclass(frozen=True)
@@ -74,18 +75,25 @@ class TorqueModel:
             ["tau_ext", "tau_pas", "tau_act", "strength", "dtau_ext"],
         )
         self.default_loads = pack(self.loads)
+        dense = [ca.densify(v) for v in self.function(q, p)]
+        self._compiled = Compiled(
+            ca.Function("torques_dense", [q, p], dense, ["q", "loads"], self.function.name_out())
+        )
 
     def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
-        """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own."""
+        """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own. (One
+        model per thread: it evaluates in buffers of its own.)"""
         p = self.default_loads if loads is None else loads
-        out = self.function(q, p)
-        tau_e, tau_p, tau_a, st = (np.asarray(v).reshape(-1) for v in out[:4])
-        carried = np.empty(2 * self.body.n)
+        out = self._compiled(q=q, loads=p)
+        tau_e, tau_p, tau_a, st = (
+            out[k].copy() for k in ("tau_ext", "tau_pas", "tau_act", "strength")
+        )
+        n = self.body.n
+        carried = np.empty(2 * n)
         carried[0::2] = np.maximum(tau_a, 0.0)
         carried[1::2] = np.maximum(-tau_a, 0.0)
-        return Torques(
-            np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried, np.asarray(out[4])
-        )
+        jacobian = out["dtau_ext"].reshape((n, n), order="F").copy()
+        return Torques(np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried, jacobian)
 
 
 def torque_expressions(

@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casadi_posture.compiled import Compiled
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult, active_constraints
 
@@ -101,40 +102,13 @@ class LexicographicOptions:
     rank_tolerance: float = 1e-9
 
 
-class _Compiled:
-    """A CasADi Function evaluated on preallocated dense NumPy arrays, which a keyword call
-    would convert at every call (0.15 ms per NLP solve at 42 DOF)."""
-
-    def __init__(self, function: ca.Function) -> None:
-        self.function = function
-        self._buffer, self._evaluate = function.buffer()
-        f = function
-        self.inputs = {f.name_in(i): np.zeros(f.nnz_in(i)) for i in range(f.n_in())}
-        self.outputs = {f.name_out(i): np.zeros(f.nnz_out(i)) for i in range(f.n_out())}
-        for i, array in enumerate(self.inputs.values()):
-            self._buffer.set_arg(i, memoryview(array))
-        for i, array in enumerate(self.outputs.values()):
-            self._buffer.set_res(i, memoryview(array))
-
-    def __call__(self, **values: np.ndarray | float) -> dict[str, np.ndarray]:
-        """The outputs for the named input ``values`` (0 for an input not given); the
-        arrays are overwritten by the next call."""
-        for name, array in self.inputs.items():
-            array[:] = values.get(name, 0.0)
-        self._evaluate()
-        return self.outputs
-
-    def stats(self) -> dict:
-        """The solver statistics of the last call."""
-        return self._buffer.stats()
-
-
 class LexicographicSolver:
-    """One parametric NLP per priority level, built once per problem structure: ``levels``
-    holds its IPOPT solvers, ``first_tries`` its SQP ones (none when ``max_iterations`` is
-    below ``SQP_MAX_ITERATIONS``). After a solve, ``methods`` says per level whose answer
-    was kept: "sqp", "ipopt", "ipopt+sqp" (polished) or "start" (an answer that raised a
-    higher level's residual, refused)."""
+    """One parametric NLP per priority level, built once per problem structure, each on its
+    first use (a comfort level determines every DOF, so the final ‖q - q_prev‖² level of
+    such a hierarchy is never built): an IPOPT solver and an SQP one (none when
+    ``max_iterations`` is below ``SQP_MAX_ITERATIONS``). After a solve, ``methods`` says per
+    level whose answer was kept: "sqp", "ipopt", "ipopt+sqp" (polished) or "start" (an
+    answer that raised a higher level's residual, refused)."""
 
     name = "lexicographic"
 
@@ -144,18 +118,10 @@ class LexicographicSolver:
         self.hierarchy = hierarchy
         self.options = options or LexicographicOptions()
         body = hierarchy.body
-        problems = [self._problem(k) for k in range(hierarchy.depth + 1)]
-        self.levels = [self._ipopt(k, nlp) for k, (nlp, _) in enumerate(problems)]
-        self.first_tries = (
-            [self._sqp(k, nlp, gn) for k, (nlp, gn) in enumerate(problems)]
-            if self.options.max_iterations >= SQP_MAX_ITERATIONS
-            else []
-        )
-        self._ipopt_solvers = [_Compiled(f) for f in self.levels]
-        self._sqp_solvers = [_Compiled(f) for f in self.first_tries]
+        self._built: list[tuple[Compiled, Compiled | None] | None] = [None] * (hierarchy.depth + 1)
         f = hierarchy.function
         dense = [ca.densify(v) for v in f(body.q, hierarchy.p)]
-        self._values = _Compiled(
+        self._values = Compiled(
             ca.Function("levels", [body.q, hierarchy.p], dense, f.name_in(), f.name_out())
         )
         self._bind(hierarchy)
@@ -174,6 +140,18 @@ class LexicographicSolver:
         self._lower, self._upper = hierarchy.body.lower, hierarchy.body.upper
         push = np.minimum(BOUND_PUSH, (self._upper - self._lower) / 4)
         self._inside = (self._lower + push, self._upper - push)
+
+    def _level(self, k: int) -> tuple[Compiled, Compiled | None]:
+        """The IPOPT and SQP solvers of level k+1, built on first use (shared by the solvers
+        :meth:`rebind` makes)."""
+        built = self._built[k]
+        if built is None:
+            nlp, hessian = self._problem(k)
+            sqp = None
+            if self.options.max_iterations >= SQP_MAX_ITERATIONS:
+                sqp = Compiled(self._sqp(k, nlp, hessian))
+            built = self._built[k] = (Compiled(self._ipopt(k, nlp)), sqp)
+        return built
 
     def _problem(self, k: int) -> tuple[dict, ca.SX]:
         """The NLP of level k+1 (k = depth: the final ‖q - q_prev‖² level) and the
@@ -372,8 +350,7 @@ class LexicographicSolver:
         posture level of a 42-DOF humanoid failed in 20 iterations); without SQP solvers,
         IPOPT alone. Returns the posture (``start`` itself when no answer beats it), what
         went wrong ('' if nothing) and the iterations spent."""
-        ipopt, spent = self._ipopt_solvers[k], 0
-        sqp = self._sqp_solvers[k] if self._sqp_solvers else None
+        (ipopt, sqp), spent = self._level(k), 0
         if near and sqp is not None:
             inside = np.clip(start, *self._inside)
             q, failure, _, spent = self._attempt(
@@ -404,7 +381,7 @@ class LexicographicSolver:
 
     def _attempt(
         self,
-        solver: _Compiled,
+        solver: Compiled,
         start: np.ndarray,
         x0: np.ndarray,
         objective: float,
