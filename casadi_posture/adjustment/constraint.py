@@ -95,6 +95,15 @@ class ConstraintSettings:
     adjustment: Adjustment = "paper"
     fatigue_weight: float = 10.0
 
+    def describe(self) -> str:
+        """The adjustment in words: 'active strategy' (the paper's), or the whole body's."""
+        if self.adjustment == "whole_body":
+            kept = f"levels 1-{self.keep_levels} kept" if self.keep_levels else "levels kept"
+            return (
+                f"whole-body adjustment ({kept}, effort weighed by 1 + {self.fatigue_weight:g}·F)"
+            )
+        return f"{self.strategy} strategy"
+
 
 @dataclass(frozen=True)
 class Event:

@@ -129,7 +129,10 @@ def comfort_measure(
     for term in given:
         if term not in MEASURES[name]:
             raise ProblemError(
-                None, f"{key}.weights.{term}", term, f"a term of {name}: one of {MEASURES[name]}"
+                None,
+                f"{key}.weights.{term}",
+                given[term],
+                f"no weight: {name} has only the terms {list(MEASURES[name])}",
             )
     table = parameters.load("comfort")
     terms = {t: 0.0 for t in TERMS}

@@ -189,7 +189,7 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
     stats = report["solver_statistics"]
     click.echo(
         f"{problem}: {report['simulated_s']:g} of {report['duration_s']:g} s simulated, "
-        f"{result.solver} solver, {report['strategy']} strategy; {result.wall_time_s:.2f} s "
+        f"{result.solver} solver, {result.settings.describe()}; {result.wall_time_s:.2f} s "
         f"wall, {100 * result.ik_time_s / max(result.wall_time_s, 1e-12):.0f} % in IK, "
         f"{stats['ik_fallbacks']} steps by the other solver, {stats['ik_failures']} IK failures, "
         f"{stats['ik_reused']} unchanged steps kept their posture"

@@ -17,7 +17,7 @@ Shown = tuple[int, str, object]
 
 def title(result: SimulationResult) -> str:
     """Problem, strategy and solver, and whether the run was cut short."""
-    text = f"{result.problem.path.stem}: {result.settings.strategy} strategy, {result.solver}"
+    text = f"{result.problem.path.stem}: {result.settings.describe()}, {result.solver}"
     if result.stop == "interrupted":
         text += " (interrupted: partial run)"
     elif result.stop == "never_held":

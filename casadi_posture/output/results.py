@@ -76,6 +76,8 @@ def summary(result: SimulationResult) -> dict[str, Any]:
     return {
         "problem": str(problem.path),
         "solver": result.solver,
+        "adjustment": settings.adjustment,
+        "fatigue_weight": settings.fatigue_weight if settings.adjustment == "whole_body" else None,
         "strategy": settings.strategy,
         "r_min": settings.r_min,
         "recovery_law": problem.fatigue.settings(),
