@@ -473,18 +473,23 @@ class Design:
 
     @property
     def gain(self) -> float:
-        """best − start [min or percentage points] (``inf``: the best is unlimited)."""
-        if math.isinf(self.best.value) and math.isinf(self.start.value):
-            return 0.0
-        return self.best.value - self.start.value
+        """The answer: the IK re-solved at the best design − start [min or percentage
+        points] (``inf``: the re-solve is unlimited). What a person at the design would do,
+        as far as the IK predicts it; :attr:`nlp_gain` is the NLP's own."""
+        return _gain(self.start, self.check)
+
+    @property
+    def nlp_gain(self) -> float:
+        """The NLP's posture at the best design − start [min or percentage points]."""
+        return _gain(self.start, self.best)
 
     @property
     def ratio(self) -> float | None:
-        """best / start [-] (``inf``: from a finite to an unlimited endurance; None from a
-        start of 0, where no ratio exists)."""
-        if math.isinf(self.best.value) and math.isinf(self.start.value):
+        """re-solved / start [-] (``inf``: from a finite to an unlimited endurance; None
+        from a start of 0, where no ratio exists)."""
+        if math.isinf(self.check.value) and math.isinf(self.start.value):
             return 1.0
-        return self.best.value / self.start.value if self.start.value > 0 else None
+        return self.check.value / self.start.value if self.start.value > 0 else None
 
     def at_bound(self, j: int) -> str | None:
         """'lower' or 'upper' when design variable j ends at that bound, else None."""
@@ -525,7 +530,9 @@ class Design:
                 "absolute": self.gain,
                 "unit": "min" if self.objective == "endurance" else "percentage points",
                 "ratio": self.ratio,
-                "note": "the best is unlimited (null: no finite gain)"
+                "of": "the IK re-solved at the best design",
+                "nlp_absolute": self.nlp_gain,
+                "note": "the re-solve is unlimited (null: no finite gain)"
                 if math.isinf(self.gain)
                 else None,
             },
@@ -737,12 +744,13 @@ def _finish(
     if lost:
         flags.append(f"the re-solved IK does not achieve kept level(s) {lost} at the design")
     if not agrees:
-        notes.append(
+        flags.append(
             f"the re-solved IK ({check_answer.ik.solver if check_answer.ik else '-'}) gives "
             f"{_show(check.value, objective)} where the NLP gives {_show(best.value, objective)}: "
             f"it settles the posture its own way (largest joint difference {gap:.1f} deg), "
-            "from the file's posture and with the dropped levels pulling it, while the NLP "
-            "takes the posture best for the objective among those that keep the task"
+            "with the dropped levels pulling it, while the NLP takes the posture best for the "
+            "objective among those that keep the task; the gain is the re-solve's, and the "
+            "NLP's posture is not what the IK predicts a person does at the design"
         )
     if objective == "endurance" and best.load_pct_mvc is not None and math.isfinite(best.value):
         threshold = float(problem.fatigue.settings()["load_threshold_pct_mvc"])
@@ -775,6 +783,13 @@ def _finish(
         notes=tuple(notes),
         flags=tuple(flags + list(best_answer.flags)),
     )
+
+
+def _gain(start: Score, end: Score) -> float:
+    """end − start [min or percentage points]; 0 between two unlimited endurances."""
+    if math.isinf(end.value) and math.isinf(start.value):
+        return 0.0
+    return end.value - start.value
 
 
 def _better(a: Score, b: Score, objective: str) -> bool:

@@ -119,7 +119,30 @@ def test_the_design_is_never_below_the_start(name: str, free: dict) -> None:
     assert answer.success, answer.status
     assert answer.best.value >= answer.start.value
     assert answer.kept_residual <= 1e-4
-    assert not answer.flags
+    assert not answer.flags or answer.flags == (_re_solve_flag(answer),)
+    assert answer.gain == pytest.approx(answer.check.value - answer.start.value)
+
+
+def _re_solve_flag(answer) -> str:
+    """The flag of a re-solved IK that settles elsewhere than the NLP (the standing shelf:
+    the comfort level pulls the re-solve toward neutral)."""
+    assert not answer.agrees
+    return next(f for f in answer.flags if f.startswith("the re-solved IK"))
+
+
+def test_a_re_solve_that_differs_is_flagged_and_exits_1() -> None:
+    """The standing shelf: the NLP drops the comfort level, the re-solve keeps it, so the
+    two postures differ; the answer is the re-solve's gain, flagged (exit 1)."""
+    args = ["design", str(PROBLEMS / "standing_shelf_box.toml"), "--free"]
+    args += ["tasks[2].target_m[2],tasks[3].target_m[2]=1.0:1.6", "--json"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 1, result.output
+    data = json.loads(result.stdout)
+    assert data["check"]["agrees"] is False
+    assert any(f.startswith("the re-solved IK") for f in data["flags"])
+    start, check = data["start"]["endurance_min"], data["check"]["endurance_min"]
+    assert data["gain"]["absolute"] == pytest.approx(check - start)
+    assert data["gain"]["nlp_absolute"] == pytest.approx(data["best"]["endurance_min"] - start)
 
 
 def test_capable_objective_raises_the_share() -> None:
@@ -172,7 +195,8 @@ def test_a_load_over_strength_is_flagged_and_has_no_gain_ratio() -> None:
     assert data["start"]["endurance_min"] == 0 and data["gain"]["ratio"] is None
     assert any("over strength" in flag for flag in data["flags"])
     table = CliRunner().invoke(main, args)
-    assert "gain: +0.000 min\n" in table.output and "×" not in table.output
+    assert "gain (IK re-solved at the design): +0.000 min\n" in table.output
+    assert "×" not in table.output
 
 
 @pytest.mark.parametrize(

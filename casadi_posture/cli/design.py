@@ -76,8 +76,8 @@ def design_command(
 
     Every level the IK achieves at the start is kept as an equality; the others are
     dropped (the person takes the best posture). Exit code 1 when IPOPT fails or the
-    design does not keep the task (flagged); a re-solved IK that settles another posture
-    is said plainly, not flagged.
+    design does not keep the task, or when the IK re-solved at the design settles another
+    posture than the NLP's (flagged): the gain reported is the re-solve's.
 
     \b
     Example:
@@ -125,6 +125,11 @@ def _write(answer: Design, out: Path) -> list[Path]:
     return [data, figure]
 
 
+def _signed(gain: float) -> str:
+    """A gain with its sign, or 'unlimited'."""
+    return "unlimited" if math.isinf(gain) else f"{gain:+.3f}"
+
+
 def _echo(answer: Design) -> None:
     unit = "endurance (min)" if answer.objective == "endurance" else "capable (%)"
     click.echo(
@@ -158,13 +163,15 @@ def _echo(answer: Design) -> None:
             digits=3,
         )
     )
-    gain = "unlimited" if math.isinf(answer.gain) else f"{answer.gain:+.3f}"
     units = "min" if answer.objective == "endurance" else "percentage points"
     ratio = "" if answer.ratio is None else f" (×{fmt(answer.ratio, 3)})"
-    click.echo(f"\ngain: {gain} {units}{ratio}")
+    click.echo(f"\ngain (IK re-solved at the design): {_signed(answer.gain)} {units}{ratio}")
     tolerance = answer.to_dict()["check"]["tolerance"]
     verdict = "agrees" if answer.agrees else "DIFFERS"
-    click.echo(f"re-solve check: {verdict} (tolerance {tolerance})")
+    click.echo(
+        f"re-solve check: {verdict} with the NLP's gain {_signed(answer.nlp_gain)} "
+        f"(tolerance {tolerance})"
+    )
     for note in answer.notes:
         click.echo(f"note: {note}")
     for flag in answer.flags:
