@@ -18,13 +18,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
+
 from casadi_posture.biomech.capability import (
     Capability,
     PopulationStrength,
     capability,
     population,
 )
-from casadi_posture.biomech.torques import Torques
+from casadi_posture.biomech.torques import Torques, footing_function
+from casadi_posture.body.loads import pack
+from casadi_posture.body.support import margin, support_polygon
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import cached_solver
@@ -269,7 +273,7 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     torques = problem.torque_model().evaluate(problem.posture if q is None else q)
     groups = tuple(group_loads(problem, torques))
     capable = capability(population_strength(problem, torques.strength), torques.half_joint_torque)
-    flags = tuple(_over_strength(groups))
+    flags = (*_over_strength(groups), *_off_balance(problem, torques.q))
     return StaticAnswer(problem, torques, groups, None, (), flags, capable)
 
 
@@ -313,6 +317,36 @@ def _over_strength(groups: Sequence[GroupLoad]) -> list[str]:
         return []
     needs = ", ".join(f"{g.name} needs {g.load_pct_mvc:.2f} %MVC" for g in over)
     return [f"over strength: {needs}; this posture cannot be held"]
+
+
+def _off_balance(problem: Problem, q: Sequence[float]) -> list[str]:
+    """A flag when a body standing on two feet has the centre of pressure of its weight
+    and loads (pushes included) outside the support polygon of its feet, or a foot's share
+    of the floor's reaction below 0 (body/support.py): the floor would have to pull."""
+    body = problem.body
+    footing = footing_function(body, tuple(load.at for load in problem.loads))
+    if footing is None:
+        return []
+    pressure, share = (np.asarray(v).ravel() for v in footing(q, pack(problem.loads)))
+    distance = margin(support_polygon(body, q), pressure)
+    carried, root = (
+        next(f.name for f in body.feet if (f.dof is None) == rooted) for rooted in (False, True)
+    )
+    shares = {carried: float(share[0]), root: 1.0 - float(share[0])}
+    pulled = [f"{name} {value:.3f}" for name, value in shares.items() if value < 0]
+    if distance < 0:
+        return [
+            "off balance: the centre of pressure of the body's weight and the loads lies "
+            f"{100 * -distance:.1f} cm outside the feet's support polygon; the person cannot "
+            "stand like this without holding on"
+        ]
+    if pulled:
+        return [
+            "the centre of pressure lies beyond a sole's centre, where the rule sharing the "
+            f"floor's reaction gives a foot a negative share ({', '.join(pulled)}): the leg "
+            "torques assume the floor pulls that foot down, outside the rule's validity"
+        ]
+    return []
 
 
 def population_strength(

@@ -206,9 +206,10 @@ class Pinocchio:
         pin.updateFramePlacements(self.model, self.data)
         return pin.getFrameJacobian(self.model, self.data, frame, pin.LOCAL_WORLD_ALIGNED)
 
-    def reaction(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def reaction(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """The floor's reaction on the carried foot by support.py's rule: its force [N], the
-        sole centre [m] and the arm [m] from that centre to the force's point on the floor."""
+        sole centre [m], the arm [m] from that centre to the force's point on the floor and
+        its couple about the vertical [N·m] (the share s of the whole reaction)."""
         gravity = np.array([0.0, 0.0, -self.described["gravity_m_s2"]])
         mass, com = self.weight(q)
         total = mass * gravity
@@ -226,8 +227,10 @@ class Pinocchio:
         line = centre[:2] - root
         share = np.dot(pressure - root, line) / np.dot(line, line)
         offset = pressure - (root + share * line)
-        force = np.array([0.0, 0.0, share * -total[2]])
-        return force, centre, np.array([offset[0], offset[1], -centre[2]])
+        # The moment about the vertical through the pressure point, shared by the same s.
+        twist = moment[2] - (pressure[0] * total[1] - pressure[1] * total[0])
+        force = -share * total
+        return force, centre, np.array([offset[0], offset[1], -centre[2]]), -share * twist
 
     def external(self, q: np.ndarray) -> np.ndarray:
         """τe [N·m] = -g(q) + pushes + the floor's reaction on the carried foot."""
@@ -243,9 +246,9 @@ class Pinocchio:
         (zero for a body without feet)."""
         if self.carried is None:
             return np.zeros(self.model.nv)
-        force, _, arm = self.reaction(q)
+        force, _, arm, couple = self.reaction(q)
         j = self.jacobian(self.sole, q)
-        return j[:3].T @ force + j[3:].T @ np.cross(arm, force)
+        return j[:3].T @ force + j[3:].T @ (np.cross(arm, force) + np.array([0.0, 0.0, couple]))
 
 
 @pytest.fixture(scope="module")
@@ -338,11 +341,13 @@ def _carried_reaction(
     wrench, *_ = np.linalg.lstsq(j.T, tau - tau_pushes, rcond=None)
     assert np.max(np.abs(j.T @ wrench - (tau - tau_pushes))) < 1e-9
     force, moment = wrench[:3], wrench[3:]
-    # A vertical force: no horizontal part, no moment about the vertical.
-    assert np.max(np.abs([force[0], force[1], moment[2]])) < 1e-8
     centre = reference.data.oMf[reference.sole].translation
-    point = centre + np.array([-moment[1], moment[0], 0.0]) / force[2]
-    point[2] = 0.0
+    # The force acts on the floor (arm z = -centre z): solve arm × force = moment for x, y.
+    down = -centre[2]
+    arm = np.array(
+        [(down * force[0] - moment[1]) / force[2], (moment[0] + down * force[1]) / force[2], down]
+    )
+    point = centre + arm
     return force, point
 
 
@@ -385,6 +390,31 @@ def test_symmetric_stance_shares_the_weight_equally(pin: Any, tmp_path: Path) ->
         assert abs(sole[2] - np.mean(feet[:, 2])) < 1e-12
         assert abs(sole[1] + np.mean(np.array(reference.root["outline_m"])[:, 1])) < 1e-12
         assert abs(point[1] - sole[1]) < 1e-9
+
+
+def test_a_symmetric_push_is_shared_equally(pin: Any, tmp_path: Path) -> None:
+    """Both hands push forward with 40 N in a mirror-symmetric stance: each foot takes half
+    the horizontal reaction (-40 N) as it takes half the weight, so each leg DOF carries the
+    torque of its mirror (the horizontal force once went all to the root foot: hip torques
+    of -13.8 and +60.4 N·m)."""
+    push = {"name": "push_r", "at": "wrist_r", "mass_kg": 0.0, "force_N": [40.0, 0.0, 0.0]}
+    path = tmp_path / "push.toml"
+    path.write_text(_text("standing", loads=(push, {**push, "name": "push_l", "at": "wrist_l"})))
+    problem = api.load(path)
+    reference = Pinocchio(pin, _described(path))
+    torques = problem.torque_model()
+    dofs = problem.body.dof_names
+    rng = np.random.default_rng(11)
+    for _ in range(4):
+        q = _symmetric_posture(problem, rng)
+        tau = torques.evaluate(q).external
+        for kind in ("hip_flexion", "knee_flexion", "ankle_flexion", "hip_abduction"):
+            right, left = tau[dofs.index(f"{kind}_r")], tau[dofs.index(f"{kind}_l")]
+            assert abs(right - left) < 1e-9, (kind, right, left)
+        for name in ("lumbar_bending", "lumbar_rotation"):
+            assert abs(tau[dofs.index(name)]) < 1e-9
+        force, _ = _carried_reaction(reference, torques, q)
+        assert force == pytest.approx([-40.0, 0.0, reference.weight(q)[0] * G / 2], abs=1e-9)
 
 
 def test_reactions_balance_weight_and_loads(pin: Any, tmp_path: Path) -> None:

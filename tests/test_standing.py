@@ -115,3 +115,36 @@ def test_solve_notes_the_dofs_the_tasks_leave_free(tmp_path: Path) -> None:
     # feet 6 + balance 2 + two hands 6 rows determine 14 of 29 DOFs
     assert "note: the tasks leave 15 of 29 DOFs free" in notes["loose"]
     assert "DOFs free" not in notes["standing_shelf_box"]
+
+
+def test_torques_flag_a_posture_whose_centre_of_pressure_leaves_the_feet() -> None:
+    """Leaning the trunk back over extended hips puts the centre of pressure behind the
+    heels: `torques` flags it (exit 1) by the distance the balance of `simulate` measures.
+    Without pushes the centre of pressure is the centre of mass of body and loads over the
+    floor, so both measures must agree."""
+    import json
+
+    from click.testing import CliRunner
+
+    from casadi_posture.biomech.torques import footing_function
+    from casadi_posture.body.loads import pack
+    from casadi_posture.body.support import Support
+    from casadi_posture.cli import main
+
+    path = PROBLEMS / "standing_shelf_box.toml"
+    angles = {"lumbar_flexion": -25, "hip_flexion_r": -20, "hip_flexion_l": -20}
+    lean = [arg for name, deg in angles.items() for arg in ("--posture", f"{name}={deg}")]
+    result = CliRunner().invoke(main, ["torques", str(path), *lean, "--json"])
+    assert result.exit_code == 1, result.output
+    flags = [f for f in json.loads(result.stdout)["flags"] if f.startswith("off balance")]
+    assert len(flags) == 1
+    problem = load_problem(path).with_posture(angles)
+    carried = [(load.at, load.mass) for load in problem.loads]
+    ground, margins = Support(problem.body).balance(problem.posture[None, :], carried)
+    footing = footing_function(problem.body, tuple(load.at for load in problem.loads))
+    pressure, _ = footing(problem.posture, pack(problem.loads))
+    assert np.asarray(pressure).ravel() == pytest.approx(ground[0], abs=1e-9)
+    assert margins[0] < 0
+    assert f"lies {100 * -margins[0]:.1f} cm outside" in flags[0]
+    upright = CliRunner().invoke(main, ["torques", str(path), "--json"])
+    assert not [f for f in json.loads(upright.stdout)["flags"] if "balance" in f]

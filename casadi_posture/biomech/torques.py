@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from casadi_posture.biomech.passive import PassiveTorque
 from casadi_posture.biomech.strength import Strength
 from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
-from casadi_posture.body.support import reaction_torque
+from casadi_posture.body.support import carried_foot, floor_pressure, reaction_torque
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.compiled import Compiled
 
@@ -113,21 +114,44 @@ def torque_expressions(
     return tau_ext, tau_pas, -(tau_pas + tau_ext), st
 
 
-def _external(body: BodyModel, loads: Sequence[Load], p: ca.SX) -> ca.SX:
-    """τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M, the floor's reaction included [N·m]."""
+def _applied(
+    body: BodyModel, ats: Sequence[str], p: ca.SX
+) -> tuple[list[tuple[ca.SX, ca.SX]], list[ca.SX], list[str | None]]:
+    """Every applied force (point [m], force [N], world) — the segments' weights, then the
+    weight and push of each load, at its landmark of ``ats`` — the loads' pure moments
+    [N·m], and the DOF frame each moment acts on."""
     g = ca.DM([0.0, 0.0, -body.gravity])
     forces = [(body.segment_com(s), s.mass * g) for s in body.segments]
     moments = []
+    for k, at in enumerate(ats):
+        mass = p[LOAD_PARAMETERS * k]
+        force = mass * g + p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
+        forces.append((body.landmark(at), force))
+        moments.append(p[LOAD_PARAMETERS * k + 4 : LOAD_PARAMETERS * k + 7])
+    return forces, moments, [body.landmarks[at].dof for at in ats]
+
+
+def _external(body: BodyModel, loads: Sequence[Load], p: ca.SX) -> ca.SX:
+    """τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M, the floor's reaction included [N·m]."""
+    forces, moments, frames = _applied(body, [load.at for load in loads], p)
     tau = ca.SX.zeros(body.n)
     for point, force in forces:
         tau += body.jacobian(point).T @ force
-    for k, load in enumerate(loads):
-        mass = p[LOAD_PARAMETERS * k]
-        force = mass * g + p[LOAD_PARAMETERS * k + 1 : LOAD_PARAMETERS * k + 4]
-        moment = p[LOAD_PARAMETERS * k + 4 : LOAD_PARAMETERS * k + 7]
-        point = body.landmark(load.at)
-        tau += body.jacobian(point).T @ force
-        tau += body.angular_jacobian(body.landmarks[load.at].dof).T @ moment
-        forces.append((point, force))
-        moments.append(moment)
+    for moment, frame in zip(moments, frames, strict=True):
+        tau += body.angular_jacobian(frame).T @ moment
     return tau + reaction_torque(body, forces, moments)
+
+
+@lru_cache(maxsize=16)
+def footing_function(body: BodyModel, ats: tuple[str, ...]) -> ca.Function | None:
+    """``footing(q, loads) -> (c, s)`` of a body standing on two feet with loads at the
+    landmarks ``ats``: the centre of pressure ``c`` (x, y) [m] of everything applied
+    (weights, loads, pushes; ``loads`` packed by :func:`pack`) and the carried foot's share
+    ``s`` [-] of the floor's reaction (body/support.py); ``None`` otherwise. Built once per
+    body and load points."""
+    if carried_foot(body) is None:
+        return None
+    p = ca.SX.sym("loads", LOAD_PARAMETERS * len(ats))
+    forces, moments, _ = _applied(body, ats, p)
+    pressure, share = floor_pressure(body, forces, moments)
+    return ca.Function("footing", [body.q, p], [pressure, share], ["q", "loads"], ["c", "s"])

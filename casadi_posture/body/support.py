@@ -12,11 +12,16 @@ reaction is statically indeterminate; the model splits it by a stated rule:
   the two soles: the carried foot takes ``s·W``, with ``s`` the position of ``c`` projected
   on that line (0 at the root foot, 1 at the carried one);
 - both feet press at the same offset ``d`` from that line, so the two pressures add up to
-  ``W`` at ``c``; the carried foot's reaction is a vertical force ``s·W`` at the centre of
-  its sole plus ``d``. Horizontal forces and moments about the vertical go to the root
-  foot, whose reaction needs no torque of the DOFs.
+  ``W`` at ``c``;
+- the horizontal force and the moment about the vertical through ``c`` are shared by the
+  same rule: the carried foot takes the share ``s`` of the whole reaction (force and that
+  moment), at the centre of its sole plus ``d`` on the floor; the root foot, whose reaction
+  needs no torque of the DOFs, takes the rest. The two reactions add up to the applied
+  resultant at ``c`` for any ``s``: a symmetric stance shares a symmetric push equally.
 
-The carried foot's reaction enters the external torque by virtual work like a push.
+The carried foot's reaction enters the external torque by virtual work like a push. An
+``s`` outside [0, 1] (the centre of pressure beyond a foot) needs the floor to pull that
+foot down: :func:`floor_pressure` gives ``s`` and ``c`` so that answers can flag them.
 """
 
 from __future__ import annotations
@@ -47,6 +52,29 @@ def carried_foot(body: BodyModel) -> Foot | None:
     return next(f for f in body.feet if f.dof is not None)
 
 
+def _resultant(
+    forces: Sequence[tuple[ca.SX, ca.SX]], moments: Sequence[ca.SX]
+) -> tuple[ca.SX, ca.SX]:
+    """The applied force [N] and its moment about the world origin [N·m]."""
+    total = sum((f for _, f in forces), ca.SX.zeros(3))
+    moment = sum((ca.cross(x, f) for x, f in forces), ca.SX.zeros(3))
+    return total, moment + sum(moments, ca.SX.zeros(3))
+
+
+def _pressure_and_share(
+    body: BodyModel, foot: Foot, total: ca.SX, moment: ca.SX
+) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """The centre of pressure ``c`` (x, y) [m], the carried foot's share ``s`` [-] and its
+    sole centre [m] for an applied resultant (force [N], moment about the origin [N·m])."""
+    root = next(f for f in body.feet if f.dof is None)
+    pressure = ca.vertcat(-moment[1] / total[2], moment[0] / total[2])
+    root_centre = root.centre()[:2]
+    centre = _sole_centre(body, foot)
+    line = centre[:2] - root_centre
+    share = ca.dot(pressure - root_centre, line) / ca.dot(line, line)
+    return pressure, share, centre
+
+
 def reaction_torque(
     body: BodyModel, forces: Sequence[tuple[ca.SX, ca.SX]], moments: Sequence[ca.SX]
 ) -> ca.SX:
@@ -56,21 +84,31 @@ def reaction_torque(
     foot = carried_foot(body)
     if foot is None:
         return ca.SX.zeros(body.n)
-    root = next(f for f in body.feet if f.dof is None)
-    total = sum((f for _, f in forces), ca.SX.zeros(3))
-    moment = sum((ca.cross(x, f) for x, f in forces), ca.SX.zeros(3))
-    moment += sum(moments, ca.SX.zeros(3))
-    weight = -total[2]
-    pressure = ca.vertcat(-moment[1] / total[2], moment[0] / total[2])
-    root_centre = root.centre()[:2]
-    centre = _sole_centre(body, foot)
-    line = centre[:2] - root_centre
-    share = ca.dot(pressure - root_centre, line) / ca.dot(line, line)
-    offset = pressure - (root_centre + share * line)
-    force = ca.vertcat(0.0, 0.0, share * weight)
+    total, moment = _resultant(forces, moments)
+    pressure, share, centre = _pressure_and_share(body, foot, total, moment)
+    root_centre = next(f for f in body.feet if f.dof is None).centre()[:2]
+    offset = pressure - (root_centre + share * (centre[:2] - root_centre))
+    # Moment of the applied resultant about the vertical through c (its only part there).
+    twist = moment[2] - (pressure[0] * total[1] - pressure[1] * total[0])
+    force = -share * total
     arm = ca.vertcat(offset, -centre[2])
+    couple = ca.vertcat(0.0, 0.0, -share * twist)
     torque = body.jacobian(centre).T @ force
-    return torque + body.angular_jacobian(foot.dof).T @ ca.cross(arm, force)
+    return torque + body.angular_jacobian(foot.dof).T @ (ca.cross(arm, force) + couple)
+
+
+def floor_pressure(
+    body: BodyModel, forces: Sequence[tuple[ca.SX, ca.SX]], moments: Sequence[ca.SX]
+) -> tuple[ca.SX, ca.SX]:
+    """The centre of pressure ``c`` (x, y) [m] of the applied ``forces`` and ``moments`` and
+    the carried foot's share ``s`` [-] of the floor's reaction (0: all on the root foot, 1:
+    all on the carried one; outside [0, 1] the rule has the floor pull a foot down), for a
+    body standing on two feet."""
+    foot = carried_foot(body)
+    if foot is None:
+        raise ValueError("the floor's reaction is shared only by a body standing on two feet")
+    pressure, share, _ = _pressure_and_share(body, foot, *_resultant(forces, moments))
+    return pressure, share
 
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
