@@ -240,7 +240,7 @@ def resolve(spec: ProblemSpec, path: Path) -> Problem:
     loads = tuple(_load(body, spec, i, path) for i in range(len(spec.loads)))
     _check_tasks(body, spec, path)
     regions = [h.region for h in body.half_joints]
-    endurance = endurance_model(spec.fatigue.endurance)
+    endurance = endurance_model(spec.fatigue.endurance or default_endurance(body))
     fatigue = fatigue_model(
         spec.fatigue.recovery_law,
         regions=regions,
@@ -596,6 +596,15 @@ def _degrees(angle: Any, key: str, name: str, path: Path) -> float:
     if isinstance(angle, bool) or not isinstance(angle, int | float) or not math.isfinite(angle):
         raise ProblemError(path, f"{key}.{name}", angle, "a finite number of degrees")
     return float(angle)
+
+
+def default_endurance(body: BodyModel) -> str:
+    """The endurance model of a file that names none: the paper's single curve (Manenica)
+    on a body moving in one plane, as the paper's scenarios; Frey-Law & Avin's curves per
+    joint region on a 3-D body, whose trunk, leg and wrist groups the paper's one curve
+    was never fitted to (at 19 %MVC it gives the ankle plantarflexors 6.4 min against the
+    meta-analysis' 17.7; docs/endurance.md)."""
+    return "manenica" if body.planar else "frey_law_avin"
 
 
 def _dof_index(body: BodyModel, name: str, key: str, path: Path) -> int:

@@ -153,3 +153,26 @@ def test_the_docs_table_of_endurance_against_data_is_what_the_models_give() -> N
     manenica = {(r[0], r[1]): float(r[4].removesuffix(" %")) for r in rows}
     assert [manenica["shoulder", load] for load in ("30", "50", "70")] == [73, 80, 36]
     assert manenica["elbow", "20"] == -42
+
+
+def test_the_default_endurance_follows_the_body() -> None:
+    """A file naming no endurance model takes the paper's curve on a planar arm and Frey-Law
+    & Avin's per region on a 3-D body: there the ankle plantarflexors at 19 %MVC hold
+    34.71·0.19^-2.06 s = 17.7 min (the paper's curve: 6.4 min); a file's own choice wins."""
+    from conftest import PROBLEMS
+
+    from casadi_posture.problem import load_problem, problem_from_data
+
+    assert load_problem(PROBLEMS / "holding_m45.toml").fatigue.endurance.name == "manenica"
+    shelf = load_problem(PROBLEMS / "standing_shelf_box.toml")
+    assert "endurance" not in shelf.data.get("fatigue", {})
+    assert shelf.fatigue.endurance.name == "frey_law_avin"
+    minutes = shelf.fatigue.endurance_time_s(19.0, "ankle") / 60
+    assert minutes == pytest.approx(34.71 * 0.19**-2.06 / 60, rel=1e-9)
+    assert minutes == pytest.approx(17.7, abs=0.05)
+    data = {**shelf.data, "fatigue": {**shelf.data["fatigue"], "endurance": "manenica"}}
+    paper = problem_from_data(data, shelf.path)
+    assert paper.fatigue.endurance.name == "manenica"
+    minutes = paper.fatigue.endurance_time_s(19.0, "ankle") / 60
+    assert minutes == pytest.approx(np.exp(2.70 - 0.0448 * 19), rel=1e-9)
+    assert minutes == pytest.approx(6.4, abs=0.05)

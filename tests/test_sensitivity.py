@@ -36,9 +36,14 @@ def _perturbed(problem: Problem, item: Input, delta: float) -> Problem:
         return replace(problem, passive={**problem.passive, dof: changed})
     if item.kind == "endurance":
         endurance = problem.fatigue.endurance
-        name = item.key.rsplit(".", 1)[1]
-        record = getattr(endurance, name)
-        endurance = replace(endurance, **{name: replace(record, value=record.value + delta)})
+        if hasattr(endurance, "table"):  # coefficients per region (frey_law_avin)
+            record = endurance.table[item.key]
+            table = {**endurance.table, item.key: replace(record, value=record.value + delta)}
+            endurance = replace(endurance, table=table)
+        else:
+            name = item.key.rsplit(".", 1)[1]
+            record = getattr(endurance, name)
+            endurance = replace(endurance, **{name: replace(record, value=record.value + delta)})
         regions = [h.region for h in problem.body.half_joints]
         fatigue = fatigue_model(
             problem.spec.fatigue.recovery_law,
@@ -136,7 +141,7 @@ def test_the_standing_body_against_finite_differences() -> None:
         "posture_deg.shoulder_flexion_r",
         "body.half_joints.shoulder_flexors_r.strength_Nm",
         "joints.shoulder_flexion_r.passive.k3",
-        "endurance.manenica.b",
+        "endurance.frey_law_avin.shoulder.b1",
     ]
     assert _check(problem, result, keys) == len(keys)
 

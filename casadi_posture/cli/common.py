@@ -78,10 +78,10 @@ def main() -> None:
     Angles are in degrees, torques in N·m, lengths in m, times in s or min as
     each column header says. Bad input exits with code 2 and one line on stderr.
 
-    Endurance is Manenica's, the paper's model, by default: for fidelity to the paper,
-    not for accuracy (it is 36-80 % long at the shoulder between 30 and 70 %MVC);
-    fatigue.endurance = "frey_law_avin" follows the Frey-Law & Avin 2010 meta-analysis
-    (docs/endurance.md).
+    Endurance by default: Manenica's, the paper's model, on the paper's planar arms (for
+    fidelity to the paper, not accuracy: 36-80 % long at the shoulder between 30 and 70
+    %MVC); Frey-Law & Avin's 2010 meta-analysis per joint region on the 3-D bodies.
+    fatigue.endurance chooses another (docs/endurance.md).
     """
 
 

@@ -209,7 +209,7 @@ def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_j
         emit_json(
             {
                 "problem": problem,
-                "endurance_model": resolved.spec.fatigue.endurance,
+                "endurance_model": resolved.fatigue.endurance.name,
                 "recovery_law": resolved.fatigue.name,
                 "endurance_rule": answer.rule,
                 "feasible": answer.feasible,

@@ -423,7 +423,7 @@ Task = Annotated[
 
 
 class FatigueSpec(Strict):
-    endurance: str = "manenica"
+    endurance: str | None = None
     recovery_law: Literal["threshold", "continuous", "3cc_r"] = "threshold"
     fatigue_threshold: Annotated[float, Field(gt=0, le=1)] = 0.8
     recovery_threshold: Annotated[float, Field(gt=0, le=1)] = 0.5
