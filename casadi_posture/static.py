@@ -26,12 +26,16 @@ from casadi_posture.biomech.capability import (
     capability,
     population,
 )
+from casadi_posture.biomech.comfort import neutral_posture
 from casadi_posture.biomech.torques import Torques, footing_function
 from casadi_posture.body.loads import pack
 from casadi_posture.body.support import margin, support_polygon
+from casadi_posture.ergonomics.plausibility import Plausibility, PostureCheck
+from casadi_posture.errors import ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import cached_solver
+from casadi_posture.ik.tasks import Comfort, tasks_from_specs
 from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
@@ -144,7 +148,9 @@ class StaticAnswer:
     """Torques, loads and endurances at one posture: the problem's own (:func:`at_posture`)
     or the one the IK solves for (:func:`solve`, which sets ``ik`` and ``levels``), and the
     share of men and women able to exert its torques (``capable``, biomech/capability.py).
-    ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can)."""
+    ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can);
+    ``plausibility`` reports how plausible the posture is for a person (its flags are
+    among ``flags``)."""
 
     problem: Problem
     torques: Torques
@@ -153,6 +159,7 @@ class StaticAnswer:
     levels: tuple[Level, ...]
     flags: tuple[str, ...]
     capable: Capability
+    plausibility: PostureCheck | None = None
 
     def __repr__(self) -> str:
         group = self.limiting
@@ -273,8 +280,9 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     torques = problem.torque_model().evaluate(problem.posture if q is None else q)
     groups = tuple(group_loads(problem, torques))
     capable = capability(population_strength(problem, torques.strength), torques.half_joint_torque)
-    flags = (*_over_strength(groups), *_off_balance(problem, torques.q))
-    return StaticAnswer(problem, torques, groups, None, (), flags, capable)
+    check = plausibility(problem).check(torques.q, "posture")
+    flags = (*_over_strength(groups), *_off_balance(problem, torques.q), *check.flags)
+    return StaticAnswer(problem, torques, groups, None, (), flags, capable, check)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
@@ -308,6 +316,7 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
         levels,
         (*flags, *answer.flags),
         answer.capable,
+        answer.plausibility,
     )
 
 
@@ -347,6 +356,28 @@ def _off_balance(problem: Problem, q: Sequence[float]) -> list[str]:
             "torques assume the floor pulls that foot down, outside the rule's validity"
         ]
     return []
+
+
+def plausibility(problem: Problem) -> Plausibility:
+    """The plausibility checks of ``problem``'s body, tasks and loads, the neutral posture
+    its comfort level uses (else the shipped one; none for a body without one)."""
+    tasks = tasks_from_specs(
+        problem.spec.tasks,
+        problem.body,
+        problem.loads,
+        problem.posture,
+        problem.passive,
+        problem.strength,
+    )
+    comfort = next((t for t in tasks if isinstance(t, Comfort)), None)
+    if comfort is not None:
+        neutral = comfort.measure.neutral
+    else:
+        try:
+            neutral = neutral_posture(problem.body)
+        except ProblemError:
+            neutral = None
+    return Plausibility(problem.body, tasks, problem.loads, neutral)
 
 
 def population_strength(

@@ -119,7 +119,10 @@ def test_the_design_is_never_below_the_start(name: str, free: dict) -> None:
     assert answer.success, answer.status
     assert answer.best.value >= answer.start.value
     assert answer.kept_residual <= 1e-4
-    assert not answer.flags or answer.flags == (_re_solve_flag(answer),)
+    if answer.agrees:
+        assert not answer.flags
+    else:  # the NLP's posture is also judged: on the shelf it twists the trunk (flagged)
+        assert _re_solve_flag(answer) in answer.flags
     assert answer.gain == pytest.approx(answer.check.value - answer.start.value)
 
 

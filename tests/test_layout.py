@@ -22,6 +22,7 @@ FLOORS = {
     "biomech": 4,
     "ik": 5,
     "problem": 6,
+    "ergonomics": 6,
     "static": 7,
     "adjustment": 7,
     "simulation": 8,

@@ -183,6 +183,8 @@ def echo_torques(answer: StaticAnswer) -> None:
         click.echo(f"note: {note}")
     if answer.problem.spec.schedule is not None:
         click.echo(f"note: {SCHEDULE_NOTE}")
+    if answer.plausibility is not None:
+        click.echo(f"plausibility of the {answer.plausibility.line()}")
 
 
 def echo_free_dofs(problem: Problem) -> None:

@@ -67,6 +67,7 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
                 "endurance_rule": answer.rule,
                 "torques": {"dofs": answer.dofs(), "half_joints": answer.half_joints()},
                 "capable": answer.capable_report(),
+                "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
             }
         )
     else:

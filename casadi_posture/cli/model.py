@@ -217,6 +217,7 @@ def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_j
                 "dofs": answer.dofs(),
                 "half_joints": answer.half_joints(),
                 "capable": answer.capable_report(),
+                "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
             }
         )
     else:

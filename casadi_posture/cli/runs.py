@@ -231,6 +231,14 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
         click.echo(f"  recovered at {rec['time_s']:g} s{rest}: {posture}")
     if len(recoveries) > SHOWN_RECOVERIES:
         click.echo(f"  ... and {len(recoveries) - SHOWN_RECOVERIES} more in summary.json")
+    plausible = report["plausibility"]
+    shown = plausible["postures"][:SHOWN_RECOVERIES] + plausible["postures"][-1:]
+    for posture in dict.fromkeys(p["summary"] for p in shown):
+        click.echo(f"  plausibility at the {posture}")
+    for held in plausible["held_at_limits"]:
+        click.echo(
+            f"  {held['dof']} rests on its {held['limit_deg']:g}° limit for {held['seconds']:g} s"
+        )
     for flag in report["flags"]:
         click.echo(f"FLAGGED: {flag}")
     click.echo("files: " + ", ".join(str(f) for f in files))
@@ -467,6 +475,17 @@ def whatif(
         headers += ["first at threshold (s)", "exhausted group", "cycles", "task held (s)"]
     if scheduled:
         headers.append("work cycles (held whole)")
+    # The plausibility columns a task calls for: left/right apart on a symmetric task, out
+    # of the plane on a sagittal one (the largest over a run's key postures).
+    plausible = {
+        key: header
+        for key, header in (
+            ("asymmetry_deg" if static else "max_asymmetry_deg", "left/right apart (deg)"),
+            ("out_of_plane_deg" if static else "max_out_of_plane_deg", "out of plane (deg)"),
+        )
+        if any(row.get(key) is not None for row in report.rows)
+    }
+    headers += list(plausible.values())
     headers.append("flags")
     order = {k: [str(v) for v in values] for k, values in parsed}
 
@@ -500,6 +519,7 @@ def whatif(
             ]
         if scheduled:
             line.append(_work_cycles(row))
+        line += [row.get(key) for key in plausible]
         rows.append([*line, row["flags"] or "-"])
     right = {headers.index(h) for h in ("task held (s)",) if h in headers}
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):

@@ -21,9 +21,10 @@ import numpy as np
 from casadi_posture import __version__
 from casadi_posture.description import description
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.output.key_postures import recoveries
 from casadi_posture.output.plain import dumps
 from casadi_posture.simulation import SimulationResult
-from casadi_posture.static import endurance, rule
+from casadi_posture.static import endurance, plausibility, rule
 
 #: Recovery postures listed on screen; summary.json has them all.
 SHOWN_RECOVERIES = 5
@@ -119,6 +120,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "keep_levels": result.settings.keep_levels,
         "schedule": schedule_summary(result),
         "balance_margin_min_m": balance_margin_min(result),
+        "plausibility": plausibility_report(result),
         "flags": flags(result),
         "solver_statistics": {
             "steps": int(tl.time.size),
@@ -206,6 +208,7 @@ def flags(result: SimulationResult) -> list[str]:
         out.append(f"over strength at the start ({names}): the posture cannot be held at all")
     if result.ik_failures:
         out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
+    out += plausibility_report(result)["flags"]
     margin = balance_margin_min(result)
     if margin is not None and margin < 0:
         lost = tl.time[np.argmax(tl.balance[1] < 0)]
@@ -214,6 +217,31 @@ def flags(result: SimulationResult) -> list[str]:
             f"by {-margin:.3g} m (see balance_margin_m in timeline.csv)"
         )
     return out
+
+
+def plausibility_report(result: SimulationResult) -> dict[str, Any]:
+    """How plausible the run's postures are for a person (ergonomics/plausibility.py): the
+    start, each recovery and the end; the DOFs resting on a limit and for how long [s]; and
+    the flags of postures a source calls uncomfortable or extreme."""
+    tl = result.timeline
+    checks = plausibility(result.problem)
+    report: dict[str, Any] = {
+        "symmetric_task": checks.symmetric,
+        "sagittal_task": checks.planar,
+        "postures": [],
+        "held_at_limits": [],
+        "flags": [],
+    }
+    if not tl.time.size:
+        return report
+    steps = [(0, "start")] + [(s, "recovery") for s in recoveries(result)]
+    steps.append((tl.time.size - 1, "end"))
+    postures = [checks.check(tl.q[s], label, float(tl.time[s])) for s, label in steps]
+    held = checks.held_at_limits(tl.time, tl.q)
+    report["postures"] = [p.to_dict() for p in postures]
+    report["held_at_limits"] = held
+    report["flags"] = [f for p in postures for f in p.flags] + checks.held_flags(held)
+    return report
 
 
 def over_strength_at_start(result: SimulationResult) -> list[str]:

@@ -17,18 +17,26 @@ from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, at_posture
 def static_row(answer: StaticAnswer) -> dict[str, Any]:
     """Whether level 1 was reached, each half-joint's load [%MVC] and endurance [min], the
     groups over strength, the limiting group, the share of men and of women capable of the
-    task [%] and the flags (one string)."""
+    task [%], how plausible the posture is (joints near a limit, asymmetry and
+    out-of-plane angle [deg], None where the task is neither symmetric nor sagittal) and
+    the flags (one string)."""
     row: dict[str, Any] = {}
     if answer.levels:
         top = answer.levels[0]
         row |= _reach(top.achieved, top.residual, top.unit)
     start = {g.name: (g.load_pct_mvc, g.endurance_s) for g in answer.groups}
     regions = _regions(answer.problem.body)
+    check = answer.plausibility
     return (
         row
         | _endurance(start, regions)
         | _capable(answer.capable)
-        | {"flags": "; ".join(answer.flags)}
+        | {
+            "joints_near_limit": len(check.near_limits) if check else None,
+            "asymmetry_deg": check.asymmetry_deg if check else None,
+            "out_of_plane_deg": check.out_of_plane_deg if check else None,
+            "flags": "; ".join(answer.flags),
+        }
     )
 
 
@@ -74,6 +82,7 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
             "ik_failures": report["solver_statistics"]["ik_failures"],
             "ik_fallbacks": report["solver_statistics"]["ik_fallbacks"],
             "balance_margin_min_m": report["balance_margin_min_m"],
+            **_plausible(report["plausibility"]),
             "flags": "; ".join(report["flags"]),
         }
     )
@@ -88,6 +97,21 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     for axis, value in zip("xyz", position, strict=True):
         row[f"recovery_{result.effector}_{axis}_m"] = value
     return row
+
+
+def _plausible(report: dict[str, Any]) -> dict[str, float | None]:
+    """The run's largest asymmetry and out-of-plane angle over its key postures [deg] (None:
+    not a symmetric or sagittal task) and the longest time a DOF rests on a limit [s]."""
+
+    def most(key: str) -> float | None:
+        values = [p[key] for p in report["postures"] if p[key] is not None]
+        return max(values, default=None)
+
+    return {
+        "max_asymmetry_deg": most("asymmetry_deg"),
+        "max_out_of_plane_deg": most("out_of_plane_deg"),
+        "longest_at_limit_s": max((h["seconds"] for h in report["held_at_limits"]), default=0.0),
+    }
 
 
 def _capable(capable: Capability | None) -> dict[str, float | None]:

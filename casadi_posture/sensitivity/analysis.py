@@ -194,7 +194,12 @@ def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
     total = by_theta + by_q @ dq
     m = loads.numel()
     groups = tuple(h.name for h in problem.body.half_joints)
-    limiting_group = answer.limiting if not answer.flags else None
+    # The task's endurance has a derivative where the posture solves and can be held (an
+    # implausible or off-balance posture still has one, and says so in its flags).
+    held = (
+        answer.feasible and (answer.ik is None or answer.ik.success) and answer.reached is not False
+    )
+    limiting_group = answer.limiting if held else None
     limiting = None
     task, d_task = None, np.zeros(graph.values.size)
     if limiting_group is not None and limited[groups.index(limiting_group.name)]:
