@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import importlib.util
+import math
 from pathlib import Path
 
 import pytest
+
+import casadi_posture as cp
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -36,4 +39,37 @@ def test_batch_folder(tmp_path: Path) -> None:
     )
     statuses = {row["case"]: row["status"] for row in report.rows}
     assert statuses["frontal_elbow"] == "skipped"
-    assert {s for c, s in statuses.items() if c != "frontal_elbow"} == {"ok"}
+    assert statuses["seated_assembly"] == "flagged"  # its trunk leans back (plausibility)
+    assert {s for c, s in statuses.items() if c not in ("frontal_elbow", "seated_assembly")} == {
+        "ok"
+    }
+
+
+def test_wall_protocol(capsys: pytest.CaptureFixture[str]) -> None:
+    wall = _example("wall_protocol")
+    problem = cp.load(wall.PROBLEMS / "standing_wall_horizontal.toml")
+    height, distance = (float(v) for v in wall.wrist_position(problem)(problem.posture))
+    # The file puts the dot 1.108625 m above the floor, 0.35 m ahead of and 0.25 m below
+    # the shoulder's centre (the 2-DOF arm's angles put the wrist there).
+    assert height == pytest.approx(1.108625, abs=1e-6)
+    assert distance == pytest.approx(math.hypot(0.35, 0.25), abs=1e-4)
+    rows = wall.main(duration_s=60.0, lines=wall.LINES[:1], variants=wall.VARIANTS[:1])
+    cells = [c.strip() for c in rows[0].strip("|").split("|")]
+    # 60 s, before any group reaches the threshold: nothing recovers, the wrist is held.
+    assert cells[2:5] == ["none", "0", "1 (whole run)"]
+    assert "0.60 m from the shoulder" in rows[1]
+    assert "wall time" in capsys.readouterr().out
+
+
+def test_wall_protocol_merges_repeated_recoveries() -> None:
+    wall = _example("wall_protocol")
+    first, again = (
+        wall.Recovery(364, 1.25, 0.22, -0.21, 0.0),
+        wall.Recovery(681, 1.252, 0.221, -0.2, 0.0),
+    )
+    other = wall.Recovery(900, 1.30, 0.20, -0.25, 0.01)
+    text = wall.positions_text([first, again, other])
+    assert text == (
+        "1.25 m, 0.22 m (-0.21 m along; 364, 681 s); "
+        "1.30 m, 0.20 m (-0.25 m along, off the line 0.010 m; 900 s)"
+    )
