@@ -10,14 +10,18 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
+from matplotlib.colors import to_rgba
+from matplotlib.path import Path as Outline
 from PIL import Image
 
 import casadi_posture as cp
 from casadi_posture.cli import main
-from casadi_posture.output import animation, scene
+from casadi_posture.output import animation, figures3d, mannequin, scene
 from casadi_posture.output.animation import frame_steps, write_animation
 from casadi_posture.output.figures3d import postures_3d_figure
+from casadi_posture.output.key_postures import key_postures
 from casadi_posture.output.plots import REGION_MIN_FATIGUE, fatigue_regions_figure
+from casadi_posture.output.skeleton import Skeleton
 
 HUMANOID = Path(__file__).resolve().parents[1] / "benchmarks" / "problems" / "humanoid_28.toml"
 ARM = PROBLEMS / "holding_m45.toml"
@@ -174,3 +178,143 @@ def test_simulate_animate_writes_a_gif_and_mp4_needs_ffmpeg(
         "and none was found)"
     ]
     assert not (tmp_path / "mp4").exists()
+
+
+# The mannequin: the 3-D human bodies drawn as a person.
+
+WALL = PROBLEMS / "standing_wall_horizontal.toml"
+SEATED = PROBLEMS / "seated_assembly.toml"
+
+
+@pytest.fixture(scope="module")
+def wall() -> cp.api.Simulation:
+    return cp.simulate(cp.load(WALL, SHORT))
+
+
+def _inside(point: np.ndarray, points: np.ndarray) -> bool:
+    """Whether ``point`` lies in the convex hull of ``points`` seen along every world axis
+    (a necessary condition of lying in the 3-D hull)."""
+    for axes in ([0, 2], [1, 2], [0, 1]):
+        outline = Outline(mannequin.hull(points[:, axes]))
+        if not outline.contains_point(point[axes], radius=1e-9):
+            return False
+    return True
+
+
+def test_every_joint_centre_of_the_standing_body_lies_inside_its_mannequin() -> None:
+    body = cp.load(WALL).body
+    rng = np.random.default_rng(7)
+    q = rng.uniform(np.maximum(body.lower, -0.8), np.minimum(body.upper, 0.8), (2, body.n))
+    skeleton = Skeleton(body, q)
+    names = {p.name for p in skeleton.parts}
+    limbs = [f"{k}_{s}" for k in ("upper_arm", "forearm", "hand", "thigh", "shank", "foot")
+             for s in "rl"]  # fmt: skip
+    assert {"head", "neck", "torso", "pelvis", *limbs} <= names
+    # The joint centres, by the body's own kinematics (not the mannequin's frames); the
+    # vertex, heels and toes lie on the skin, not inside.
+    joints = [n for n in body.landmarks if not n.startswith(("vertex", "heel", "toe"))]
+    position = ca.Function("lm", [body.q], [ca.horzcat(*[body.landmark(n) for n in joints])])
+    for step in range(len(q)):
+        solids = [points.reshape(-1, 3) for points in skeleton.solids(step)]
+        xyz = np.asarray(position(q[step])).T
+        for name, point in zip(joints, xyz, strict=True):
+            assert any(_inside(point, s) for s in solids), (name, step)
+        # Each limb segment's solid holds both its end joints.
+        for part, points in zip(skeleton.parts, solids, strict=True):
+            segment = next((s for s in body.segments if s.name == part.name), None)
+            if segment is not None and part.limb and not part.name.startswith("foot"):
+                for end in (segment.proximal, segment.distal):
+                    assert _inside(xyz[joints.index(end)], points), (part.name, end)
+
+
+def test_the_mannequin_is_as_tall_as_the_body_and_stands_on_the_floor() -> None:
+    problem = cp.load(WALL)
+    skeleton = Skeleton(problem.body, np.zeros((1, problem.body.n)))
+    points = np.vstack([p.reshape(-1, 3) for p in skeleton.solids(0)])
+    assert points[:, 2].max() == pytest.approx(problem.spec.body.stature_m, abs=0.015)
+    assert points[:, 2].min() == pytest.approx(0.0, abs=1e-3)
+    # Shoulder breadth over the deltoids: about a quarter of the stature or more
+    # (ANSUR II men: some 0.49-0.51 m at 1.756 m); the body is narrower at the hips.
+    shoulders = points[np.abs(points[:, 2] - 1.36) < 0.05, 1]
+    assert 0.45 < np.ptp(shoulders) < 0.56
+
+
+def test_a_seated_upper_body_sits_on_a_stool_with_its_feet_on_the_floor() -> None:
+    problem = cp.load(SEATED)
+    skeleton = Skeleton(problem.body, np.zeros((1, problem.body.n)))
+    parts = {p.name: points for p, points in zip(skeleton.parts, skeleton.solids(0), strict=True)}
+    context = {p.name for p in skeleton.parts if p.context}
+    assert context == {"seat", "post", "base"} | {
+        f"{k}_{s}" for k in ("thigh", "shank", "foot") for s in "rl"
+    }
+    # The problem file's 0.46 m seat under hips at 0.55 m; feet flat on the floor.
+    assert parts["seat"][..., 2].max() == pytest.approx(0.46, abs=0.005)
+    for side in "rl":
+        assert parts[f"foot_{side}"][..., 2].min() == pytest.approx(0.0, abs=1e-3)
+    # Drawn only: the legs and stool are in no task limb and weigh nothing.
+    assert mannequin.limbs_of(problem.body, skeleton.parts, ["hip_r", "c7"]) == set()
+
+
+def _fills(ax: object, name: str) -> list[np.ndarray]:
+    return [np.asarray(p.get_facecolor()) for p in ax.patches if p.get_gid() == f"body:{name}"]
+
+
+def test_the_figure_draws_a_person_its_task_limb_deeper_and_a_large_3d_view(
+    wall: cp.api.Simulation,
+) -> None:
+    result = wall.result
+    fig = postures_3d_figure(result)
+    views = {ax.get_label(): ax for ax in fig.axes}
+    postures = len(key_postures(result, unit="min"))
+    assert postures >= 2
+    body = result.problem.body
+    eyes = np.asarray(ca.Function("e", [body.q], [body.landmark("eyes")])(result.timeline.q[0]))
+    for name in ("sagittal", "frontal", "top"):
+        ax = views[name]
+        assert not _by_gid(ax.lines, "bones")[0].get_xydata().size  # no stick figure
+        heads = [p for p in ax.patches if p.get_gid() == "body:head"]
+        assert len(heads) == postures
+        axes = list(scene.VIEWS[name][0])
+        assert heads[0].get_path().contains_point(eyes.ravel()[axes])
+        # The limb carrying the load and the tasks' effector (wrist_r) is deeper in every
+        # posture; the idle arm as light as the trunk.
+        for task, idle, trunk in zip(
+            _fills(ax, "forearm_r"), _fills(ax, "forearm_l"), _fills(ax, "torso"), strict=True
+        ):
+            assert idle[:3].mean() - task[:3].mean() > 0.2
+            np.testing.assert_allclose(idle, trunk)
+        # The initial posture opaque, the others translucent within opaque outlines.
+        alphas = [f[3] for f in _fills(ax, "torso")]
+        assert alphas[0] == 1.0 and max(alphas[1:]) < 0.5
+        edges = [p.get_edgecolor()[3] for p in ax.patches if p.get_gid() == "body:torso"]
+        assert min(edges) == 1.0
+    surfaces = [c for c in views["3-D"].collections if c.get_gid() == "mannequin"]
+    assert len(surfaces) == postures
+    # The 3-D view at least three quarters the size of the sagittal view's height.
+    inches = fig.get_size_inches()
+    side = views["3-D"].get_position().width * inches[0]
+    assert side >= 0.75 * views["sagittal"].get_position().height * inches[1]
+    assert inches[0] <= figures3d.WIDTH_IN + 1.2
+    plt.close(fig)
+
+
+def test_a_body_that_is_not_human_stays_a_stick_figure(humanoid: cp.api.Simulation) -> None:
+    fig = postures_3d_figure(humanoid.result)
+    sagittal = next(ax for ax in fig.axes if ax.get_label() == "sagittal")
+    assert not [p for p in sagittal.patches if str(p.get_gid()).startswith("body:")]
+    assert _by_gid(sagittal.lines, "bones")[0].get_xydata().size
+    plt.close(fig)
+
+
+def test_the_animation_recolours_the_mannequin(wall: cp.api.Simulation) -> None:
+    result = wall.result
+    frames = animation._Frames(result, list(range(result.timeline.time.size)))
+    on = int(np.argmax(result.timeline.owner >= 0))
+    assert result.timeline.owner[on] >= 0 and result.timeline.owner[0] < 0
+    side = next(ax for ax in frames.fig.axes if ax.get_label() != "3-D" and ax.patches)
+    for step, colour in ((0, animation.FREE), (on, animation.CONSTRAINED)):
+        frames.draw(step)
+        torso = next(p for p in side.patches if p.get_gid() == "body:torso")
+        np.testing.assert_allclose(torso.get_edgecolor(), to_rgba(colour))
+        assert torso.get_facecolor()[3] == 1.0
+    plt.close(frames.fig)

@@ -1,5 +1,6 @@
-"""The simulated hold as an animation: the stick figure over time, coloured by the state of
-the fatigue-reducing constraint, with the time [min] and a strip of the fatigue levels.
+"""The simulated hold as an animation: the body (a mannequin, or a stick figure for a body
+that is not human) over time, coloured by the state of the fatigue-reducing constraint,
+with the time [min] and a strip of the fatigue levels.
 
 GIF through matplotlib's PillowWriter (Pillow comes with matplotlib: it always works); MP4
 through FFMpegWriter when an ffmpeg program is on the PATH. The file is written under a
@@ -8,12 +9,12 @@ temporary name beside the target and renamed when complete."""
 from __future__ import annotations
 
 import os
+import textwrap
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib import animation
-from matplotlib.lines import Line2D
 
 from casadi_posture import interrupt
 from casadi_posture.errors import ProblemError
@@ -28,7 +29,11 @@ WRITERS = {"gif": "pillow", "mp4": "ffmpeg"}
 #: at most 12 s of animation whatever the run's length.
 FPS, MAX_FRAMES = 10, 120
 
-#: The stick figure's colour while no group owns the constraint, and while one does.
+#: How much larger than its default the 3-D view draws its box; the most characters of a
+#: legend line.
+ZOOM_3D, LEGEND_WIDTH = 1.12, 26
+
+#: The body's colour while no group owns the constraint, and while one does.
 FREE, CONSTRAINED = "black", "tab:orange"
 _COLOURS = ((FREE, "off"), (CONSTRAINED, "on"))
 
@@ -50,10 +55,12 @@ def frame_steps(steps: int, most: int = MAX_FRAMES) -> list[int]:
 
 
 def _busiest_view(scene: Scene, steps: list[int]) -> str:
-    """The orthographic view that shows the most motion of the body's points."""
+    """The side view (sagittal or frontal: a person is known by them) that shows the most
+    motion of the body's points."""
     points = scene.skeleton.points[steps]
     motion = ((points - points[0]) ** 2).sum(axis=(0, 2))
-    return max(VIEWS, key=lambda name: motion[list(VIEWS[name][0])].sum())
+    sides = [name for name, (axes, _) in VIEWS.items() if 2 in axes]
+    return max(sides, key=lambda name: motion[list(VIEWS[name][0])].sum())
 
 
 def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
@@ -97,20 +104,21 @@ def _state(result: SimulationResult, step: int) -> str:
 
 
 class _Frames:
-    """The animation's figure: for a 3-D body a 3-D view and the orthographic view that
-    shows the most motion, for a planar body its plane of motion; the state of the
-    constraint above, a strip of fatigue and a legend below; :meth:`draw` shows a step."""
+    """The animation's figure: for a 3-D body a 3-D view and the side view that shows the
+    most motion, for a planar body its plane of motion, a legend beside; the state of the
+    constraint above, a strip of fatigue below; :meth:`draw` shows a step."""
 
     def __init__(self, result: SimulationResult, steps: list[int]) -> None:
         self.result = result
         scene = Scene(result, steps)
-        self.fig = fig = plt.figure(figsize=(8.0, 5.6), dpi=100)
+        self.fig = fig = plt.figure(figsize=(9.0, 6.0), dpi=100)
         grid = fig.add_gridspec(
-            2, 2, height_ratios=[4.5, 1.1], left=0.08, right=0.97, top=0.86, bottom=0.09, hspace=0.3
-        )
+            2, 3, height_ratios=[4.5, 1.1], width_ratios=[1.5, 0.9, 0.9], left=0.05, right=0.99,
+            top=0.87, bottom=0.08, hspace=0.3, wspace=0.4,
+        )  # fmt: skip
         if scene.skeleton.planar:
             name = next(n for n, (axes, _) in VIEWS.items() if axes == scene.skeleton.plane)
-            views = [(fig.add_subplot(grid[0, :]), *VIEWS[name])]
+            views = [(fig.add_subplot(grid[0, :2]), *VIEWS[name])]
         else:
             views = [
                 (add_3d_view(fig, grid[0, 0]), (0, 1, 2), ""),
@@ -118,17 +126,20 @@ class _Frames:
             ]
         self.poses = []
         for ax, axes, name in views:
-            scene.frame(ax, axes, zoom=0.95)
+            scene.frame(ax, axes, zoom=ZOOM_3D)
             scene.draw_shapes(ax, axes, labels=False)
             self.poses.append(Pose(ax, scene, axes, color=FREE, lw=2.2))
             ax.set_title(name, fontsize=9)
-        bottom = grid[1, :].subgridspec(1, 2, width_ratios=[3.0, 1.0], wspace=0.05)
-        self.cursor = _fatigue_strip(fig.add_subplot(bottom[0]), result)
-        key = fig.add_subplot(bottom[1])
+        self.cursor = _fatigue_strip(fig.add_subplot(grid[1, :]), result)
+        key = fig.add_subplot(grid[0, 2])
         key.axis("off")
-        states = [Line2D([], [], color=c, lw=2.2, label=f"constraint {w}") for c, w in _COLOURS]
+        states = [scene.swatch(c, f"constraint {w}", lw=2.2) for c, w in _COLOURS]
         handles = states + scene.legend(names=False)
-        key.legend(handles=handles, loc="center left", fontsize=6.5, frameon=False, borderaxespad=0)
+        for handle in handles:
+            handle.set_label(
+                textwrap.fill(handle.get_label(), LEGEND_WIDTH, subsequent_indent="  ")
+            )
+        key.legend(handles=handles, loc="center left", fontsize=7, frameon=False, borderaxespad=0)
         fig.suptitle(title(result), fontsize=10, y=0.985)
         self.state = fig.text(0.5, 0.925, "", ha="center", fontsize=9)
 

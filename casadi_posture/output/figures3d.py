@@ -10,16 +10,18 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.artist import Artist
 from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
 
 from casadi_posture.output.key_postures import key_postures, title
 from casadi_posture.output.saving import save_figure
-from casadi_posture.output.scene import VIEWS, Pose, Scene, add_3d_view
+from casadi_posture.output.scene import BODY, VIEWS, Pose, Scene, add_3d_view
 from casadi_posture.simulation import SimulationResult
 
 #: Largest height and width [in] of the views together; height [in] of a legend line, and
 #: its most characters.
 HEIGHT_IN, WIDTH_IN, ENTRY_IN, LEGEND_WIDTH = 7.0, 12.0, 0.17, 44
+
+#: How much larger than its default the 3-D view draws its box (the 2-D views ignore it).
+ZOOM_3D = 1.25
 
 
 def _posture_label(scene: Scene, step: int, label: str) -> str:
@@ -49,7 +51,7 @@ def _distinct_polygons(scene: Scene, steps: list[int]) -> set[int]:
 def _handles(scene: Scene, shown: list[tuple[int, str, object]]) -> list[Artist]:
     """Legend entries: every posture, then the scene's."""
     postures = [
-        Line2D([], [], color=colour, lw=2.6 if k == 0 else 1.6, label=_posture_label(scene, s, t))
+        scene.swatch(colour, _posture_label(scene, s, t), solid=k == 0, lw=2.6 if k == 0 else 1.6)
         for k, (s, t, colour) in enumerate(shown)
     ]
     return postures + scene.legend()
@@ -57,13 +59,14 @@ def _handles(scene: Scene, shown: list[tuple[int, str, object]]) -> list[Artist]
 
 def postures_3d_figure(result: SimulationResult) -> Figure:
     """The initial, recovery and final postures overlaid in a sagittal, a frontal and a top
-    view (one scale, metres) and a 3-D view: the stick figures, each posture's centre of
-    mass and its projection on the floor, the support polygon, the tasks' targets and the
-    loads. The views are the axes labelled sagittal, frontal, top and 3-D."""
+    view (one scale, metres) and a 3-D view: the bodies (the initial one opaque, the others
+    translucent in outlines of their colour), each posture's centre of mass and its
+    projection on the floor, the support polygon, the tasks' targets and the loads. The
+    views are the axes labelled sagittal, frontal, top and 3-D."""
     shown = key_postures(result, unit="min")
     scene = Scene(result, [step for step, _, _ in shown])
     dx, dy, dz = scene.spans
-    wide = max(dx + dy, 0.6 * dz)  # the 3-D view's column [m]
+    wide = max(dx + dy, dz)  # the 3-D view's column [m]: its axes are square
     scale = min(HEIGHT_IN / (dz + dy), WIDTH_IN / (dx + dy + wide))  # in per m in every view
     handles = _handles(scene, shown)
     for handle in handles:
@@ -79,11 +82,15 @@ def postures_3d_figure(result: SimulationResult) -> Figure:
     panels.append((add_3d_view(fig, grid[:, 2]), (0, 1, 2), ""))
     fresh = _distinct_polygons(scene, [step for step, _, _ in shown])
     for ax, axes, name in panels:
-        scene.frame(ax, axes)
+        scene.frame(ax, axes, zoom=ZOOM_3D)
         scene.draw_shapes(ax, axes)
         for k, (step, _, colour) in enumerate(shown):
             width = 2.6 if k == 0 else 1.6
-            Pose(ax, scene, axes, support=step in fresh, color=colour, lw=width).update(step)
+            pose = Pose(
+                ax, scene, axes, support=step in fresh, solid=k == 0, layer=BODY + 0.05 * k,
+                color=colour, lw=width,
+            )  # fmt: skip
+            pose.update(step)
         ax.set_title(name, fontsize=9)
     legend = fig.add_subplot(grid[1, 1])
     legend.axis("off")

@@ -1,6 +1,7 @@
 """What the 3-D posture figures and the animation draw of a run, in orthographic views and a
-3-D view: the stick figure, the whole-body centre of mass and its vertical projection on the
-floor, the support polygon, the tasks' targets (points, lines, planes) and the loads."""
+3-D view: the mannequin (a stick figure for a body that is not human), the whole-body centre
+of mass and its vertical projection on the floor, the support polygon, the tasks' targets
+(points, lines, planes) and the loads."""
 
 from __future__ import annotations
 
@@ -19,6 +20,14 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from casadi_posture.body.support import margin, support_polygon
 from casadi_posture.ik.tasks import CentreOfMass, Line, Plane, Task
+from casadi_posture.output.mannequin import (
+    CONTEXT,
+    TASK_WHITE,
+    Mannequin,
+    limbs_of,
+    swatch,
+    tint,
+)
 from casadi_posture.output.skeleton import AXES, Skeleton
 from casadi_posture.simulation import SimulationResult
 
@@ -32,6 +41,10 @@ VIEWS = {
 #: Colours of the scene around the body: solid, not translucent, so that a GIF's palette
 #: stays small.
 TARGET, SUPPORT, FLOOR = "0.35", "#b5dcb5", "0.92"
+EDGE = "#3c8c3c"  # the support polygon's edge, seen from above
+
+#: zorders: the postures (one layer each, the first at BODY), then what is drawn over them.
+BODY, OVER = 2.0, 5.0
 
 #: Points below this height [m] put the body partly under the floor: no floor is drawn
 #: (a body whose origin is not on the floor, such as an arm at the shoulder).
@@ -127,8 +140,9 @@ def add_3d_view(fig: Figure, cell: SubplotSpec) -> Axes:
 
 
 class Scene:
-    """A run's stick figure, centre of mass, support polygons, task shapes and loads, and a
-    box [m] around them at the ``steps`` that will be drawn."""
+    """A run's skeleton, centre of mass, support polygons, task shapes and loads, the
+    ``task_limbs`` (those that carry a task's effector or segment or a load), and a box
+    [m] around them at the ``steps`` that will be drawn."""
 
     def __init__(self, result: SimulationResult, steps: list[int]) -> None:
         problem = result.problem
@@ -140,11 +154,18 @@ class Scene:
         carried = tuple((load.at, load.mass) for load in problem.loads if load.mass > 0)
         self.skeleton = Skeleton(problem.body, result.timeline.q, extra, carried)
         self.shapes = task_shapes(result.tasks)
+        effectors = [getattr(task, "effector", None) for task in result.tasks]
+        effectors += [at for at, _, _ in self.loads]
+        segments = [getattr(task, "segment", None) for task in result.tasks]
+        self.task_limbs = limbs_of(
+            problem.body, self.skeleton.parts, filter(None, effectors), filter(None, segments)
+        )
         self.polygons = {s: support_polygon(problem.body, result.timeline.q[s]) for s in steps}
         points = np.concatenate([self.skeleton.points[s].T for s in steps])
+        solids = [p.reshape(-1, 3) for s in steps for p in self.skeleton.solids(s)]
         self.floor = bool(points[:, 2].min() > -FLOOR_TOLERANCE)
         self.arrow = 0.12 * float(np.ptp(points, axis=0).max())
-        reach = [points, self.skeleton.com[steps]]
+        reach = [points, *solids, self.skeleton.com[steps]]
         reach += [np.c_[p, np.zeros(len(p))] for p in self.polygons.values() if p is not None]
         for at, force, _ in self.loads:
             reach += [self.skeleton.landmark(at, s) + self.arrow * _unit(force) for s in steps]
@@ -173,19 +194,34 @@ class Scene:
             return None
         return margin(polygon, self.skeleton.com[step, :2])
 
+    def swatch(self, colour: object, label: str, *, solid: bool = True, lw: float = 2.0) -> Artist:
+        """A legend entry of a posture: its mannequin's fill and outline, or a line."""
+        if self.skeleton.parts:
+            return swatch(colour, solid, label)
+        return Line2D([], [], color=colour, lw=lw, label=label)
+
     def legend(self, *, names: bool = True) -> list[Artist]:
-        """Legend entries of what surrounds the postures: the centre of mass, its projection,
-        the support polygon, the task shapes (with the tasks' ``names``) and the loads."""
-        handles: list[Artist] = [
+        """Legend entries of what surrounds the postures: the task limbs' shade, the centre
+        of mass, its projection, the support polygon, the task shapes (with the tasks'
+        ``names``) and the loads."""
+        handles: list[Artist] = []
+        if self.task_limbs:
+            limbs = ", ".join(sorted(self.task_limbs, reverse=True))
+            label = f"deeper shade: task limb{'s' * (len(self.task_limbs) > 1)} ({limbs})"
+            handles.append(Patch(fc=tint("black", TASK_WHITE), ec="black", label=label))
+        if any(part.context for part in self.skeleton.parts):
+            label = "grey: legs and stool, not modelled (context)"
+            handles.append(Patch(fc=CONTEXT[0], ec=CONTEXT[1], label=label))
+        handles.append(
             Line2D([], [], ls="", marker="o", ms=8, mfc="white", mec="0.2", mew=1.8,
                    label="whole-body centre of mass (COM)")
-        ]  # fmt: skip
+        )  # fmt: skip
         if self.floor:
             handles.append(
                 Line2D([], [], ls=":", marker="x", color="0.2", label="COM projected on the floor")
             )
         if any(p is not None for p in self.polygons.values()):
-            handles.append(Patch(color=SUPPORT, label="support polygon (feet)"))
+            handles.append(Patch(fc=SUPPORT, ec=EDGE, label="support polygon (feet)"))
         styles = {"point": {"ls": "", "marker": "x", "mew": 2}, "line": {"ls": "--"}}
         for kind in ("point", "line", "plane"):
             shown = [shape.name for shape in self.shapes if shape.kind == kind]
@@ -238,7 +274,7 @@ class Scene:
         translucent patches in 3-D and, seen edge-on, dotted in a view."""
         for shape in self.shapes:
             label = shape.name if labels else None
-            style = {"color": TARGET, "label": label}
+            style = {"color": TARGET, "label": label, "zorder": OVER}
             if shape.kind == "point":
                 ax.plot(*shape.point[list(axes)], "x", ms=8, mew=2, **style)
                 continue
@@ -265,9 +301,10 @@ class Scene:
 
 
 class Pose:
-    """One posture of the run drawn in one view (2 world axes) or in 3-D (3): bones, joints,
-    centre of mass with its drop line to the floor, support polygon (unless not ``support``)
-    and load arrows, all moved to another step by :meth:`update`."""
+    """One posture of the run drawn in one view (2 world axes) or in 3-D (3): the mannequin
+    (``solid`` or translucent, in zorder ``layer``) or the bones and joints of a body that
+    is not human, centre of mass with its drop line to the floor, support polygon (unless
+    not ``support``) and load arrows, all moved to another step by :meth:`update`."""
 
     def __init__(
         self,
@@ -276,19 +313,29 @@ class Pose:
         axes: tuple[int, ...],
         *,
         support: bool = True,
+        solid: bool = True,
+        layer: float = BODY,
         **style: object,
     ) -> None:
         self.ax, self.scene, self.axes = ax, scene, list(axes)
         self.three = len(axes) == 3
         colour = style.pop("color", "black")
         lw = float(style.pop("lw", 2.0))
-        (self.bones,) = ax.plot(*[[]] * len(axes), "-", color=colour, lw=lw, **style)
-        (self.joints,) = ax.plot(*[[]] * len(axes), "o", ms=2.5, color=colour)
-        com = {"ms": 8, "mfc": "white", "mec": colour, "mew": 1.8, "zorder": 5}
+        self.mannequin = (
+            Mannequin(ax, scene.skeleton, self.axes, task=scene.task_limbs, solid=solid,
+                      layer=layer, colour=colour)
+            if scene.skeleton.parts
+            else None
+        )  # fmt: skip
+        (self.bones,) = ax.plot(*[[]] * len(axes), "-", color=colour, lw=lw, zorder=layer, **style)
+        (self.joints,) = ax.plot(*[[]] * len(axes), "o", ms=2.5, color=colour, zorder=layer)
+        com = {"ms": 8, "mfc": "white", "mec": colour, "mew": 1.8, "zorder": OVER + 0.2}
         (self.com,) = ax.plot(*[[]] * len(axes), "o", **com)
-        (self.drop,) = ax.plot(*[[]] * len(axes), ":", color=colour, lw=1.0)
-        (self.ground,) = ax.plot(*[[]] * len(axes), "x", color=colour, ms=5, mew=1.2)
+        (self.drop,) = ax.plot(*[[]] * len(axes), ":", color=colour, lw=1.0, zorder=OVER)
+        (self.ground,) = ax.plot(*[[]] * len(axes), "x", color=colour, ms=5, mew=1.2, zorder=OVER)
         self.support = self._support_artist()
+        # From above, the body hides the polygon: its edge is drawn over the body.
+        (self.edge,) = ax.plot(*[[]] * len(axes), "-", color=EDGE, lw=1.2, zorder=OVER)
         self.show_support = support
         for artist, gid in (
             (self.bones, "bones"),
@@ -296,13 +343,14 @@ class Pose:
             (self.drop, "com-drop"),
             (self.ground, "com-floor"),
             (self.support, "support"),
+            (self.edge, "support-edge"),
         ):
             artist.set_gid(gid)
         self.arrows: list = []
         self.colour = colour
 
     def _support_artist(self):
-        style = {"color": SUPPORT}
+        style = {"color": SUPPORT, "zorder": BODY - 0.5}
         if self.three:
             return self.ax.add_collection3d(Poly3DCollection([], **style))
         if self.axes == [0, 1]:
@@ -323,13 +371,18 @@ class Pose:
         for line in (self.bones, self.joints, self.drop, self.ground):
             line.set_color(colour)
         self.com.set_markeredgecolor(colour)
+        if self.mannequin is not None:
+            self.mannequin.recolour(colour)
         self.colour = colour
 
     def update(self, step: int) -> None:
         """Move every part to the posture at ``step``."""
         scene, skeleton = self.scene, self.scene.skeleton
-        self._set(self.bones, skeleton.segments(step))
-        self._set(self.joints, skeleton.points[step][:, skeleton.joints].T)
+        if self.mannequin is not None:
+            self.mannequin.update(step)
+        else:
+            self._set(self.bones, skeleton.segments(step))
+            self._set(self.joints, skeleton.points[step][:, skeleton.joints].T)
         com = skeleton.com[step]
         self._set(self.com, com[None])
         floor = np.array([com[0], com[1], 0.0])
@@ -339,14 +392,16 @@ class Pose:
         self._draw_loads(step)
 
     def _draw_support(self, polygon: np.ndarray | None) -> None:
-        if polygon is None or len(polygon) < 3:
-            self.support.set_visible(False)
+        shown = polygon is not None and len(polygon) >= 3
+        self.support.set_visible(shown)
+        self.edge.set_visible(shown and self.axes == [0, 1])
+        if not shown:
             return
-        self.support.set_visible(True)
         if self.three:
             self.support.set_verts([np.c_[polygon, np.zeros(len(polygon))]])
         elif self.axes == [0, 1]:
             self.support.set_xy(polygon)
+            self.edge.set_data(*np.vstack([polygon, polygon[:1]]).T)
         else:
             k = self.axes[0]
             self.support.set_data([polygon[:, k].min(), polygon[:, k].max()], [0.0, 0.0])
@@ -363,7 +418,12 @@ class Pose:
                 vector = end - start
                 self.arrows.append(
                     self.ax.quiver(
-                        *start, *vector, color=self.colour, lw=1.2, arrow_length_ratio=0.3
+                        *start,
+                        *vector,
+                        color=self.colour,
+                        lw=1.2,
+                        arrow_length_ratio=0.3,
+                        zorder=OVER,
                     )
                 )
             elif np.linalg.norm((end - start)[self.axes]) > 1e-9:
@@ -374,5 +434,6 @@ class Pose:
                     mutation_scale=10,
                     color=self.colour,
                     lw=1.2,
+                    zorder=OVER,
                 )
                 self.arrows.append(self.ax.add_patch(arrow))

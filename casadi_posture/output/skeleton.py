@@ -1,5 +1,5 @@
-"""The body as a stick figure over a run: its points [m] at every step, the bones that join
-them, and the whole-body centre of mass [m]."""
+"""The body over a run: its points [m] at every step, the bones that join them (the stick
+figure), the mannequin's solids (a human body's) and the whole-body centre of mass [m]."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.axes import Axes
 
 from casadi_posture.body.tree import BodyModel
+from casadi_posture.output.mannequin import parts
 
 #: World axes and their labels.
 AXES = {0: "x forward (m)", 1: "y left (m)", 2: "z up (m)"}
@@ -55,7 +56,9 @@ class Skeleton:
     """The stick figure of ``body`` at every row of ``q`` (steps × DOFs [rad]): ``points``
     (steps × 3 × points [m]), ``bones`` (pairs of point indices), ``com`` (steps × 3 [m]:
     of the body and the ``carried`` point masses (landmark, kg), as the balance counts it),
-    and the positions of the landmarks in ``extra`` (loads, effectors) as points too."""
+    and the positions of the landmarks in ``extra`` (loads, effectors) as points too; the
+    mannequin's ``parts`` (none for a body that is not human) and the placement of their
+    frames at every step (:meth:`solids`)."""
 
     def __init__(
         self,
@@ -76,15 +79,35 @@ class Skeleton:
             else body.point(name, body.dofs[body.index[name]].origin)
             for kind, name in keys
         ]
+        self.parts = parts(body)
+        frames = list(dict.fromkeys(part.dof for part in self.parts))
+        placements = [ca.horzcat(body.point(f, (0.0, 0.0, 0.0)), body.rotation(f)) for f in frames]
+        outputs = [
+            ca.horzcat(*expressions),
+            body.com(carried),
+            ca.horzcat(ca.SX(3, 0), *placements),
+        ]
         q = np.atleast_2d(q) if len(q) else np.zeros((1, body.n))
-        function = ca.Function("skeleton", [body.q], [ca.horzcat(*expressions), body.com(carried)])
-        points, com = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps
+        function = ca.Function("skeleton", [body.q], outputs)
+        points, com, placed = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps, ...
         self.points = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
         self.com = np.asarray(com).T
+        #: steps × frames × 3 × 4: each frame's translation [m] and rotation (world = t + R x0)
+        self._placed = np.asarray(placed).reshape(3, len(q), len(frames), 4).transpose(1, 2, 0, 3)
+        self._frame = [frames.index(part.dof) for part in self.parts]
+        self._zero = [part.points() for part in self.parts]
         self.planar = body.planar
         spread = np.ptp(self.points.transpose(1, 0, 2).reshape(3, -1), axis=1)
         self.plane = tuple(sorted(int(i) for i in np.argsort(spread)[-2:]))
         self.depth = next(i for i in range(3) if i not in self.plane)
+
+    def solids(self, step: int) -> list[np.ndarray]:
+        """The mannequin's parts at ``step``: each one's ring points (k × n × 3 [m])."""
+        placed = self._placed[step]
+        return [
+            placed[f, :, 0] + zero @ placed[f, :, 1:].T
+            for f, zero in zip(self._frame, self._zero, strict=True)
+        ]
 
     def landmark(self, name: str, step: int) -> np.ndarray:
         """World position [m] of a landmark among the points at ``step``."""
