@@ -42,6 +42,7 @@ from casadi_posture.data import parameters
 from casadi_posture.data.parameters import Parameter, data_name
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.tasks import Task as IKTask
 from casadi_posture.ik.tasks import tasks_from_specs
 from casadi_posture.spec.overrides import apply
 from casadi_posture.spec.schema import (
@@ -99,10 +100,13 @@ class Problem:
         """The problem's tasks grouped into priority levels (built once per call)."""
         if not self.spec.tasks:
             raise ProblemError(self.path, "tasks", MISSING, "at least one task to solve")
-        tasks = tasks_from_specs(
+        return TaskHierarchy(self.body, self.task_objects())
+
+    def task_objects(self) -> list[IKTask]:
+        """The problem's tasks as IK task objects (none for a problem without tasks)."""
+        return tasks_from_specs(
             self.spec.tasks, self.body, self.loads, self.posture, self.passive, self.strength
         )
-        return TaskHierarchy(self.body, tasks)
 
     def torque_model(self) -> TorqueModel:
         """The compiled torque functions of this problem (build once, evaluate many)."""

@@ -35,7 +35,7 @@ from casadi_posture.errors import ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import cached_solver
-from casadi_posture.ik.tasks import Comfort, tasks_from_specs
+from casadi_posture.ik.tasks import Comfort
 from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
@@ -361,14 +361,7 @@ def _off_balance(problem: Problem, q: Sequence[float]) -> list[str]:
 def plausibility(problem: Problem) -> Plausibility:
     """The plausibility checks of ``problem``'s body, tasks and loads, the neutral posture
     its comfort level uses (else the shipped one; none for a body without one)."""
-    tasks = tasks_from_specs(
-        problem.spec.tasks,
-        problem.body,
-        problem.loads,
-        problem.posture,
-        problem.passive,
-        problem.strength,
-    )
+    tasks = problem.task_objects()
     comfort = next((t for t in tasks if isinstance(t, Comfort)), None)
     if comfort is not None:
         neutral = comfort.measure.neutral

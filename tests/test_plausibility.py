@@ -15,7 +15,6 @@ from conftest import PROBLEMS
 
 from casadi_posture.cli import main
 from casadi_posture.ergonomics.mirror import asymmetry, lateral, paired, symmetric
-from casadi_posture.ik.tasks import tasks_from_specs
 from casadi_posture.problem import load_problem, problem_from_data
 from casadi_posture.static import plausibility
 
@@ -23,22 +22,11 @@ SHELF = PROBLEMS / "standing_shelf_box.toml"
 WALL = PROBLEMS / "standing_wall_horizontal.toml"
 
 
-def _tasks(problem):
-    return tasks_from_specs(
-        problem.spec.tasks,
-        problem.body,
-        problem.loads,
-        problem.posture,
-        problem.passive,
-        problem.strength,
-    )
-
-
 def test_the_shelf_is_symmetric_and_a_shifted_hand_or_load_breaks_it() -> None:
     shelf = load_problem(SHELF)
-    assert symmetric(shelf.body, _tasks(shelf), shelf.loads)
+    assert symmetric(shelf.body, shelf.task_objects(), shelf.loads)
     wall = load_problem(WALL)
-    assert not symmetric(wall.body, _tasks(wall), wall.loads)
+    assert not symmetric(wall.body, wall.task_objects(), wall.loads)
     hand = next(i for i, t in enumerate(shelf.spec.tasks) if t.kind == "position")
     target = list(shelf.spec.tasks[hand].target_m)
     moved = problem_from_data(
@@ -46,11 +34,11 @@ def test_the_shelf_is_symmetric_and_a_shifted_hand_or_load_breaks_it() -> None:
         shelf.path,
         {f"tasks[{hand}].target_m": [target[0], target[1] + 0.01, target[2]]},
     )
-    assert not symmetric(moved.body, _tasks(moved), moved.loads)
+    assert not symmetric(moved.body, moved.task_objects(), moved.loads)
     heavier = problem_from_data(
         shelf.data, shelf.path, {"loads[0].mass_kg": shelf.loads[0].mass + 1}
     )
-    assert not symmetric(heavier.body, _tasks(heavier), heavier.loads)
+    assert not symmetric(heavier.body, heavier.task_objects(), heavier.loads)
 
 
 def test_asymmetry_of_a_mirrored_posture_is_zero_and_of_a_skewed_one_by_hand() -> None:
