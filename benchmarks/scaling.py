@@ -1,6 +1,6 @@
 """How the solvers and the simulation scale with the body: 2 to 42 DOF (not a test).
 
-Run: python benchmarks/scaling.py [--repeat N] [--sizes 2,7,14,28,42] [--simulate 2,42]
+Run: python benchmarks/scaling.py [--repeat N] [--sizes 2,7,14,28,42] [--simulate 2,7,14,28,42]
 
 On the benchmark humanoids (``benchmarks/trees.py``, files in ``benchmarks/problems/``),
 per number of DOF n:
@@ -10,19 +10,23 @@ per number of DOF n:
   numpy Baerlocher–Boulic reference written here (full n×n projectors, an SVD
   pseudo-inverse per level, the clamping loop recomputed from scratch), which calls the
   same compiled residual and Jacobian function;
-- per posture: nullspace, reference and lexicographic, from a cold start (upright, the
-  zero posture clipped into the ranges) and a warm one (the solution moved 0.5° per
-  joint), without and with
-  an active inequality aᵀq ≤ b (the right shoulder's flexion held 5° below its solution);
-  the methods run interleaved, one call each in turn, and the medians are printed;
-- agreement: the largest difference of the level residuals between the two solvers;
-- a 20-minute simulation per solver: wall time, share of it outside the IK, peak memory of
-  ``casadi-posture simulate`` at the largest n.
+- per posture: nullspace, reference and lexicographic, from the upright start (the zero
+  posture clipped into the ranges) and a warm one (the solution moved 0.5° per joint),
+  without and with an active inequality aᵀq ≤ b (the right shoulder's flexion held 5° below
+  its solution); the methods run interleaved, one call each in turn, and the medians are
+  printed;
+- agreement: the largest difference of the level residuals between the nullspace solver and
+  the lexicographic one and the reference, and each one's status;
+- a 20-minute simulation per solver from the file's posture (warm: the targets' own
+  posture) and from upright: steps, the steps the other solver took over (fallbacks), the
+  largest difference of the two solvers' postures over the steps both ran, wall time, share
+  of it outside the IK; peak memory of ``casadi-posture simulate`` at the largest n.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import statistics
 import subprocess
 import sys
@@ -40,7 +44,7 @@ from casadi_posture.ik.lexicographic import LexicographicSolver
 from casadi_posture.ik.nullspace import NullspaceSolver
 from casadi_posture.ik.result import IKResult
 from casadi_posture.output.report import table
-from casadi_posture.problem import load_problem
+from casadi_posture.problem import Problem, load_problem
 from casadi_posture.simulation import simulate
 
 #: The reference's settings: those of the package's nullspace solver (damping 1e-3, rank
@@ -179,11 +183,53 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, file=sys.stderr
     return float(done.stderr.strip().splitlines()[-1])
 
 
+def _status(iterations: int) -> str:
+    """The reference's status from its iteration count."""
+    return "converged" if iterations < MAX_ITERATIONS else "max_iterations"
+
+
+def simulation_rows(problem: Problem, upright: np.ndarray) -> list[list[object]]:
+    """Per start (the file's posture, upright [rad]) and solver, a row of the simulations
+    table: steps, fallbacks, their complement [%], the largest difference of the two solvers'
+    postures over the steps both ran [deg], wall time [s], share outside the IK [%], reused
+    steps, why it stopped."""
+    names = {d.name: math.degrees(v) for d, v in zip(problem.body.dofs, upright, strict=True)}
+    rows = []
+    for start_name, start in (("file", problem), ("upright", problem.with_posture(names))):
+        runs = {}
+        for solver in ("nullspace", "lexicographic"):
+            begin = time.perf_counter()
+            runs[solver] = (simulate(start, solver), time.perf_counter() - begin)
+        ns_q, lx_q = (run.timeline.q for run, _ in runs.values())
+        both = min(len(ns_q), len(lx_q))
+        apart = math.degrees(float(np.max(np.abs(ns_q[:both] - lx_q[:both]))))
+        for solver, (run, wall) in runs.items():
+            steps = run.timeline.time.size
+            rows.append(
+                [
+                    problem.body.n,
+                    start_name,
+                    solver,
+                    steps,
+                    run.ik_fallbacks,
+                    100 * (1 - run.ik_fallbacks / steps),
+                    apart,
+                    wall,
+                    100 * (1 - run.ik_time_s / wall),
+                    run.ik_reused,
+                    run.stop,
+                ]
+            )
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30)
     parser.add_argument("--sizes", default=",".join(map(str, trees.SIZES)))
-    parser.add_argument("--simulate", default="2,42", help="sizes to simulate 20 minutes")
+    parser.add_argument(
+        "--simulate", default=",".join(map(str, trees.SIZES)), help="sizes to simulate 20 minutes"
+    )
     args = parser.parse_args()
     sizes = [int(v) for v in args.sizes.split(",")]
     rng = np.random.default_rng(2026)
@@ -208,7 +254,7 @@ def main() -> None:
             problem.body.upper,
         )
         upright = np.clip(np.zeros(n), problem.body.lower, problem.body.upper)
-        for start_name, start in (("cold", upright), ("warm", warm)):
+        for start_name, start in (("upright", upright), ("warm", warm)):
             for label, inequality in (("none", None), ("active", held)):
                 results: dict[str, IKResult] = {
                     "ns": ns.solve(start, inequality),
@@ -244,26 +290,11 @@ def main() -> None:
                         f"{lx_result.residuals[0]:.1e}",
                         f"{np.max(np.abs(ns_result.residuals - lx_result.residuals)):.1e}",
                         f"{np.max(np.abs(ns_result.residuals - ref_residuals)):.1e}",
-                        f"{ns_result.status} / {lx_result.status}",
+                        f"{ns_result.status} / {lx_result.status} / {_status(ref_iterations)}",
                     ]
                 )
         if n in [int(v) for v in args.simulate.split(",") if v]:
-            for solver in ("nullspace", "lexicographic"):
-                start = time.perf_counter()
-                run = simulate(problem, solver)
-                wall = time.perf_counter() - start
-                sim_rows.append(
-                    [
-                        n,
-                        solver,
-                        run.timeline.time.size,
-                        wall,
-                        100 * (1 - run.ik_time_s / wall),
-                        run.ik_reused,
-                        run.ik_fallbacks,
-                        run.stop,
-                    ]
-                )
+            sim_rows += simulation_rows(problem, upright)
     print("Build (in a fresh process each)\n")
     print(
         table(
@@ -291,7 +322,7 @@ def main() -> None:
                 "LX level 1",
                 "NS-LX residuals",
                 "NS-ref residuals",
-                "status NS / LX",
+                "status NS / LX / ref",
             ],
             posture_rows,
             digits=3,
@@ -303,12 +334,15 @@ def main() -> None:
             table(
                 [
                     "n",
+                    "start",
                     "solver",
                     "steps",
+                    "fallbacks",
+                    "without fallback (%)",
+                    "NS-LX posture (deg)",
                     "wall (s)",
                     "outside IK (%)",
                     "reused",
-                    "fallbacks",
                     "stop",
                 ],
                 sim_rows,

@@ -1,24 +1,27 @@
 """The benchmark bodies: humanoid trees of 2, 7, 14, 28 and 42 DOF as problem files.
 
-Run: python benchmarks/trees.py   (rewrites benchmarks/problems/humanoid_<n>.toml)
+Run: python benchmarks/trees.py   (rewrites benchmarks/problems/humanoid_<n>.toml and
+prints, per body and start, both solvers' statuses and how far their level residuals are
+apart; benchmarks/scaling.py measures more)
 
 World frame: x forward, y to the subject's left, z up, the pelvis fixed with the hip
 centres 0.90 m above the floor. Zero posture: standing upright, arms hanging. Every
 3-DOF joint is flexion, then abduction (bending), then rotation about the segment. The
 trees and their tasks:
 
-- 2: right shoulder and elbow flexion; wrist position ▸ posture;
-- 7: a right arm (shoulder 3, elbow, forearm, wrist 2); wrist ▸ posture;
-- 14: both arms; both wrists ▸ posture;
+- 2: right shoulder and elbow flexion; wrist position ▸ comfort;
+- 7: a right arm (shoulder 3, elbow, forearm, wrist 2); wrist ▸ comfort;
+- 14: both arms; both wrists ▸ comfort;
 - 28: lumbar flexion and bending, both arms, both legs (hip 3, knee, ankle 2);
-  ankles ▸ centre of mass over the feet (x, y) ▸ wrists ▸ posture;
+  ankles ▸ centre of mass over the feet (x, y) ▸ wrists ▸ comfort;
 - 42: lumbar and thoracic spine (3 + 3), neck and head (3 + 3), clavicles (2 + 2),
   both arms and legs; the same four levels.
 
 Targets are the forward kinematics of a random posture (seeded by n), within the middle
 half of every limb's range, the trunk, neck and shoulder girdle near upright, so every
-level above the posture is reachable; the posture level
-pulls toward the upright zero posture (clipped into the ranges). Segment masses are
+level above the last is reachable. The last level is the comfort measure of the shipped
+3-D problems (docs/comfort.md: displacement from the upright neutral posture, discomfort
+near the limits, effort), which settles whatever the levels above leave free. Segment masses are
 rough de Leva (1996) shares of 73 kg and strengths rough adult values: these bodies
 measure speed, not people.
 """
@@ -33,6 +36,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.data import parameters
+from casadi_posture.data.parameters import data_name
+from casadi_posture.ik.lexicographic import LexicographicSolver
+from casadi_posture.ik.nullspace import NullspaceSolver
 from casadi_posture.problem import Problem, problem_from_data
 
 HERE = Path(__file__).resolve().parent / "problems"
@@ -349,11 +357,27 @@ def tree(n: int) -> dict[str, Any]:
 
 
 def _levels(n: int) -> list[tuple[str, list[str]]]:
-    """(task kind, effectors) per priority level above the posture."""
+    """(task kind, effectors) per priority level above the comfort level."""
     wrists = ["wrist_r"] if n in (2, 7) else ["wrist_r", "wrist_l"]
     if n < 28:
         return [("position", wrists)]
     return [("position", ["ankle_r", "ankle_l"]), ("com", []), ("position", wrists)]
+
+
+def _comfort(body: BodyModel) -> dict[str, Any]:
+    """The comfort task's own neutral angles [deg] and joint weights for the DOFs the shipped
+    comfort data do not cover (thoracic spine, neck, head, clavicles): upright (0, clipped
+    into the range), weight 1, as the shipped data take every DOF they cover."""
+    table = parameters.load("comfort")
+    missing = [d for d in body.dofs if f"comfort.neutral.{data_name(d.name)}" not in table]
+    if not missing:
+        return {}
+    return {
+        "neutral_deg": {
+            d.name: round(math.degrees(min(max(0.0, d.lower), d.upper)), 6) for d in missing
+        },
+        "joint_weights": {d.name: 1.0 for d in missing},
+    }
 
 
 def problem_data(n: int) -> dict[str, Any]:
@@ -388,16 +412,8 @@ def problem_data(n: int) -> dict[str, Any]:
                 {"name": f"hold_{effector}", "kind": "position", "priority": priority}
                 | {"effector": effector, "target_m": [round(v, 6) for v in points[effector]]}
             )
-    neutral = np.clip(np.zeros(body.n), body.lower, body.upper)
     tasks.append(
-        {
-            "name": "upright",
-            "kind": "posture",
-            "priority": len(_levels(n)) + 1,
-            "reference_deg": {
-                d.name: round(math.degrees(v), 6) for d, v in zip(body.dofs, neutral, strict=True)
-            },
-        }
+        {"name": "comfort", "kind": "comfort", "priority": len(_levels(n)) + 1} | _comfort(body)
     )
     return {
         "title": f"Benchmark humanoid, {n} DOF",
@@ -418,6 +434,23 @@ def load(n: int) -> Problem:
     from casadi_posture.problem import load_problem
 
     return load_problem(HERE / f"humanoid_{n}.toml")
+
+
+def agreement(problem: Problem) -> list[str]:
+    """Per start (the file's posture, the targets' own; upright, the zero posture clipped
+    into the ranges): each solver's status and the largest difference of their level
+    residuals (task units)."""
+    hierarchy, body = problem.hierarchy(), problem.body
+    ns, lx = NullspaceSolver(hierarchy), LexicographicSolver(hierarchy)
+    upright = np.clip(np.zeros(body.n), body.lower, body.upper)
+    lines = []
+    for name, start in (("file", problem.posture), ("upright", upright)):
+        a, b = ns.solve(start), lx.solve(start)
+        apart = float(np.max(np.abs(a.residuals - b.residuals)))
+        lines.append(
+            f"  from {name}: nullspace {a.status}, lexicographic {b.status}, {apart:.2g} apart"
+        )
+    return lines
 
 
 def _value(value: Any) -> str:
@@ -464,6 +497,7 @@ def main() -> None:
             f"{path.relative_to(HERE.parents[1])}: {problem.body.n} DOF, "
             f"{problem.hierarchy().depth} levels, {problem.body.total_mass:.1f} kg"
         )
+        print("\n".join(agreement(problem)))
 
 
 if __name__ == "__main__":

@@ -49,7 +49,8 @@ def test_torques_match_pinocchio_gravity(path: Path) -> None:
             for item in ("--posture", f"{name_}={float(angle)!r}")
         ]
         printed = runner.invoke(main, ["torques", path, "--json", *args])
-        assert printed.exit_code == 0, printed.output
+        # A random posture may be flagged (over strength, implausible): exit 1, torques alike.
+        assert printed.exit_code in (0, 1), printed.output
         tau_e = np.array([d["external_Nm"] for d in json.loads(printed.stdout)["dofs"]])
         gravity = pin.computeGeneralizedGravity(pm, data, q)
         assert np.max(np.abs(tau_e + gravity)) < 1e-9

@@ -501,7 +501,7 @@ def test_the_nullspace_solver_never_cycles_to_its_cap_on_a_5_dof_chain() -> None
         inequality = Inequality(a, float(a @ goal) - rng.uniform(0.05, 0.5))
         start = np.clip(goal + rng.normal(scale=0.1, size=5), body.lower, body.upper)
         result = make_solver("nullspace", hierarchy).solve(start, inequality)
-        statuses.append(result.status.split(";")[0])
+        statuses.append(result.status.split(";")[0].split(":")[0])
         assert result.iterations < 300, result.status
         if result.success:  # a local minimum (the lexicographic one may be elsewhere)
             assert result.residuals[0] <= hierarchy.residual_norms(start)[0] + 1e-9

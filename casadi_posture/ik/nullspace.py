@@ -67,7 +67,12 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
-from casadi_posture.ik.result import IKResult, active_constraints
+from casadi_posture.ik.result import (
+    ACHIEVED_TOLERANCE,
+    ACTIVE_TOLERANCE,
+    IKResult,
+    active_constraints,
+)
 from casadi_posture.ik.tasks import JointReference
 
 _TINY = 1e-300
@@ -96,6 +101,13 @@ class NullspaceOptions:
     level-1 residual, level-2 residual, ...) beyond ``PROGRESS_MARGIN``, or a step shorter
     than any since the best merit (``STEP_PROGRESS``). A run that does not converge
     returns the best posture it passed.
+
+    Saddle: a run at rest that misses a level whose own gradient vanishes there (no higher
+    level holds it off) is tested for negative curvature of that level and restarted from
+    a posture that lowers it (``STATIONARY``); if no restart does better, the status is
+    ``stalled: level k at a saddle, residual r``, not ``converged``. So is a rest at which
+    that level pulls a held joint limit or the held inequality back inside
+    (``KKT_TOLERANCE``): ``stalled: level k held at a limit it pulls away from, ...``.
     """
 
     damping: float | tuple[float, ...] = 1e-3
@@ -116,12 +128,59 @@ class NullspaceOptions:
 PROGRESS_MARGIN = (1e-9, 1e-10)
 REST_MARGIN = (1e-6, 1e-8)
 
+#: A better posture passed within this distance [rad, largest joint difference] of the rest
+#: posture is the same answer: near a level in conflict with a higher one (or with the
+#: inequality) the higher level's residual changes with the square of the distance, the lower
+#: one's in proportion to it, and a tail of converging iterates trades them. Measured on the
+#: 2-DOF benchmark arm under its fatigue constraint: an iterate about 9e-6 rad before the
+#: rest posture had level 2 lower by 6.9e-6 (above ``REST_MARGIN``), level 1 equal to 8
+#: digits, and the run was called stalled (138 of the 1201 steps of its simulation fell back
+#: on the other solver). The rest at both limits ``REST_MARGIN`` is for (tests/test_ik.py's
+#: limited arm) lies 0.17 rad from the better posture.
+REST_DISTANCE = ACHIEVED_TOLERANCE
+
 #: A step shorter than this fraction of the shortest one since the best merit is progress
 #: too: near a minimum the residuals change with the square of the step, below any margin,
 #: while the step itself still shrinks geometrically; in a limit cycle it does not. (Since
 #: the best merit, not since the start: a short step early in a long path must not make
 #: the geometric tail look like a stall.)
 STEP_PROGRESS = 0.999
+
+
+#: Saddles (:meth:`NullspaceSolver._leave_saddles`). A level whose own gradient Jₖᵀeₖ is
+#: below ``STATIONARY`` times ‖Jₖ‖‖eₖ‖ (outside what the joint limits and the inequality
+#: block) is not held off by a higher level: at rest with it missed, the iteration sits where
+#: its linear model sees no way down. Its second derivative is then tested along the motions
+#: that none of the levels down to it sees at first order (singular values of their stacked
+#: Jacobians below ``SADDLE_RANK`` times the largest), by central differences of ``SADDLE_PROBE``
+#: [rad]. A direction of negative curvature makes the rest posture a saddle: the iteration
+#: restarts from a posture along it (``SADDLE_STEPS`` [rad], the first that lowers the level's
+#: residual), at most ``SADDLE_RESTARTS`` times. Measured on the 7-DOF benchmark arm, wrist ▸
+#: every joint upright, from the upright posture: the iteration came to rest with the arm
+#: straight at its elbow limit, the wrist 6.0 cm beyond the target along the arm, and called
+#: it converged; ‖e_1‖² has a curvature of -0.0094 m² per rad² along the shoulder and elbow
+#: flexion that keep the wrist still at first order (bending the elbow brings the wrist
+#: closer). One restart, 0.9° of elbow flexion away, reaches the target and the numpy
+#: reference's posture.
+STATIONARY = 1e-6
+SADDLE_RANK = 1e-6
+SADDLE_PROBE = 1e-3
+SADDLE_STEPS = (0.02, 0.05, 0.1, 0.2, 0.5)
+SADDLE_RESTARTS = 3
+
+#: First-order optimality (:meth:`NullspaceSolver._unbalanced`). The clamping loop holds a
+#: joint at its limit when the sweep's Gauss-Newton step takes it beyond, which is not the
+#: sign of its multiplier: at rest the first missed level k may still pull a held joint (or
+#: the held inequality) back inside, so that it could go lower with the levels above kept.
+#: At rest with such a level, its gradient Jₖᵀeₖ is tested for the Karush-Kuhn-Tucker
+#: conditions with the levels above as equalities and the held limits and inequality as
+#: inequalities (nonnegative multipliers, :func:`_nnls`); a remainder above ``KKT_TOLERANCE``
+#: times ‖Jₖ‖‖eₖ‖ makes the status ``stalled``. Measured on the 28-DOF benchmark body under
+#: the paper's constraint on the right hip flexion (a step of the 20-minute simulation): the
+#: right hip abduction held at its upper limit with a multiplier of -0.0044 for the feet
+#: level, the ankles 0.348 m off their targets where 0.286 m is reachable (the lexicographic
+#: solver's answer); the numpy reference of benchmarks/scaling.py rests there too.
+KKT_TOLERANCE = 1e-4
 
 
 #: The damping floor of :meth:`NullspaceSolver.solve` (module docstring): when a step of at
@@ -149,6 +208,28 @@ def _better(merit: np.ndarray, best: np.ndarray, margin: tuple[float, float]) ->
         if value > reference + tolerance:
             return False
     return False
+
+
+def _nnls(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """x ≥ 0 minimising ‖a x - b‖ (Lawson & Hanson 1974, active set; a few columns)."""
+    x, free = np.zeros(a.shape[1]), np.zeros(a.shape[1], dtype=bool)
+    tolerance = 1e-12 * (1.0 + float(np.abs(a).max(initial=0.0) * np.abs(b).max(initial=0.0)))
+    for _ in range(3 * a.shape[1]):
+        w = a.T @ (b - a @ x)
+        if free.all() or w[~free].max() <= tolerance:
+            break
+        free[np.flatnonzero(~free)[np.argmax(w[~free])]] = True
+        while True:
+            z = np.zeros_like(x)
+            z[free] = np.linalg.lstsq(a[:, free], b, rcond=None)[0]
+            if z[free].min(initial=np.inf) > 0.0:
+                break
+            bad = free & (z <= 0.0)
+            alpha = np.min(x[bad] / (x[bad] - z[bad]))
+            x += alpha * (z - x)
+            free &= x > tolerance
+        x = z
+    return x
 
 
 def _svd(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -554,6 +635,7 @@ class NullspaceSolver:
         self._floor = list(self._base_floor) if self.options.curvature > 0 else None
         try:
             q, status, iterations = self._iterations(q, inequality, limit)
+            q, status, iterations = self._leave_saddles(q, status, iterations, inequality, limit)
         finally:
             self._floor = None
         residuals = self._point(q)[0][1:]
@@ -599,7 +681,9 @@ class NullspaceSolver:
                 since += 1
             if step < self.options.tolerance:
                 q = q_next
-                status = "stalled" if _better(best, merit, REST_MARGIN) else "converged"
+                worse = _better(best, merit, REST_MARGIN)
+                far = float(np.abs(best_q - q).max()) > REST_DISTANCE
+                status = "stalled" if worse and far else "converged"
                 break
             if since >= self.options.stall_iterations:
                 status = "stalled"
@@ -608,6 +692,138 @@ class NullspaceSolver:
             if q is not q_next:
                 q = np.minimum(np.maximum(q, self._lower), self._upper)
         return (q if status == "converged" else best_q), status, iterations
+
+    def _leave_saddles(
+        self,
+        q: np.ndarray,
+        status: str,
+        iterations: int,
+        inequality: Inequality | None,
+        limit: int,
+    ) -> tuple[np.ndarray, str, int]:
+        """Restart a converged run that rests on a saddle of its first missed level (see
+        ``STATIONARY``) from a posture that leaves it; keep the better rest. A saddle that no
+        restart leaves, or a rest where that level could still go lower (``KKT_TOLERANCE``),
+        is no answer: its status says which level and how far off it is [task units]."""
+        restarts = 0
+        while status == "converged":
+            found = self._saddle(q, inequality) or self._unbalanced(q, inequality)
+            if found is None:
+                break
+            k, start, why = found
+            if start is not None and restarts < SADDLE_RESTARTS and iterations < limit:
+                restarts += 1
+                q_next, status_next, spent = self._iterations(start, inequality, limit - iterations)
+                iterations += spent
+                merit, before = self._merit(q_next, inequality), self._merit(q, inequality)
+                if status_next == "converged" and _better(merit, before, REST_MARGIN):
+                    q = q_next
+                    continue
+            residual = self._point(q)[0][k + 1]
+            status = f"stalled: level {k + 1} {why}, residual {residual:.3g}"
+        return q, status, iterations
+
+    def _merit(self, q: np.ndarray, inequality: Inequality | None) -> np.ndarray:
+        """(inequality violation, ‖e_1‖, …, ‖e_L‖) at ``q`` [rad]."""
+        merit = self._point(q)[0]
+        merit[0] = 0.0 if inequality is None else inequality.violation(q)
+        return merit
+
+    def _unbalanced(
+        self, q: np.ndarray, inequality: Inequality | None
+    ) -> tuple[int, None, str] | None:
+        """The first level k missed at ``q`` [rad] when a joint limit or the inequality held
+        there keeps it from going lower, its gradient outside the KKT cone (see
+        ``KKT_TOLERANCE``); None otherwise."""
+        lower = q <= self._lower + ACTIVE_TOLERANCE
+        upper = q >= self._upper - ACTIVE_TOLERANCE
+        normals = [self._eye[:, i] for i in np.flatnonzero(upper)]
+        normals += [-self._eye[:, i] for i in np.flatnonzero(lower)]
+        if inequality is not None and inequality.a @ q >= inequality.b - ACTIVE_TOLERANCE:
+            normals.append(inequality.a)
+        norms = self._point(q)[0]
+        missed = np.flatnonzero(norms[1:] > ACHIEVED_TOLERANCE)
+        if not normals or missed.size == 0:
+            return None  # nothing held: a fixed point of the sweep is stationary
+        k = int(missed[0])
+        jacobian = self._jacobian(k)
+        gradient = jacobian.T @ self._errors[self._levels[k].rows]
+        if k:  # the levels above are equalities: their row space is left out
+            _, s, vt = np.linalg.svd(np.vstack([self._jacobian(j) for j in range(k)]))
+            kept = vt[int(np.count_nonzero(s > SADDLE_RANK * s[0])) :].T
+            gradient, normals = kept.T @ gradient, [kept.T @ v for v in normals]
+        cone = np.array(normals).T
+        remainder = gradient + cone @ _nnls(cone, -gradient)
+        scale = float(np.linalg.norm(jacobian) * norms[k + 1])
+        if np.linalg.norm(remainder) <= KKT_TOLERANCE * scale:
+            return None
+        return k, None, "held at a limit it pulls away from"
+
+    def _saddle(
+        self, q: np.ndarray, inequality: Inequality | None
+    ) -> tuple[int, np.ndarray, str] | None:
+        """The first level missed at ``q`` [rad] and a posture that lowers its residual along
+        a direction of negative curvature, when ``q`` is a saddle of that level (see
+        ``STATIONARY``); None otherwise."""
+        norms = self._point(q)[0]
+        missed = np.flatnonzero(norms[1:] > ACHIEVED_TOLERANCE)
+        if missed.size == 0 or self._levels[missed[0]].jacobian is None:
+            return None  # nothing missed, or a level of joint references: linear, no saddle
+        k = int(missed[0])
+        level = self._levels[k]
+        e, jacobian = self._errors[level.rows], level.jacobian
+        gradient = jacobian.T @ e
+        lower = q <= self._lower + ACTIVE_TOLERANCE
+        upper = q >= self._upper - ACTIVE_TOLERANCE
+        gradient[(lower & (gradient > 0.0)) | (upper & (gradient < 0.0))] = 0.0  # the limit holds
+        rows = [self._jacobian(j) for j in range(k + 1)]
+        if inequality is not None and inequality.a @ q >= inequality.b - ACTIVE_TOLERANCE:
+            a = inequality.a
+            if gradient @ a < 0.0:  # descent would break the inequality: it holds that part
+                gradient -= (gradient @ a) / (a @ a) * a
+            rows.append(a[None, :])
+        scale = float(np.linalg.norm(jacobian) * np.linalg.norm(e))
+        if np.linalg.norm(gradient) > STATIONARY * scale:
+            return None  # a higher level, a limit or the inequality holds it off: a conflict
+        _, s, vt = np.linalg.svd(np.vstack(rows))
+        rank = int(np.count_nonzero(s > SADDLE_RANK * s[0])) if s.size else 0
+        free = vt[rank:].T
+        if free.shape[1] == 0:
+            return None
+        value, direction = np.linalg.eigh(self._curvature(q, k, free))
+        if value[0] >= 0.0:
+            return None  # a minimum of the level (a target out of reach): the best it can
+        move = free @ direction[:, 0]
+        for size in SADDLE_STEPS:
+            for sign in (1.0, -1.0):
+                start = np.clip(q + sign * size * move, self._lower, self._upper)
+                if self._point(start)[0][k + 1] < norms[k + 1] * (1.0 - REST_MARGIN[0]):
+                    return k, start, "at a saddle"
+        return None
+
+    def _jacobian(self, k: int) -> np.ndarray:
+        """A copy of J_k at the last evaluated posture (selection levels: rows of I)."""
+        level = self._levels[k]
+        if level.jacobian is None:
+            return self._eye[level.selects]
+        return level.jacobian.copy()
+
+    def _curvature(self, q: np.ndarray, k: int, free: np.ndarray) -> np.ndarray:
+        """The Hessian of ‖e_k‖² at ``q`` [rad] in the coordinates y of q + free·y, by central
+        differences of ``SADDLE_PROBE`` (r(r + 1) evaluations for r columns of ``free``)."""
+        h, r = SADDLE_PROBE, free.shape[1]
+        f0 = self._point(q)[0][k + 1] ** 2
+
+        def second(v: np.ndarray) -> float:
+            up, down = self._point(q + h * v)[0][k + 1], self._point(q - h * v)[0][k + 1]
+            return (up * up + down * down - 2.0 * f0) / (h * h)
+
+        hessian = np.diag([second(free[:, i]) for i in range(r)])
+        for i in range(r):
+            for j in range(i + 1, r):
+                mixed = second(free[:, i] + free[:, j])
+                hessian[i, j] = hessian[j, i] = (mixed - hessian[i, i] - hessian[j, j]) / 2.0
+        return hessian
 
     def _adapt_floor(self, move: np.ndarray, last: np.ndarray | None) -> np.ndarray | None:
         """Raise the damping floor below level 1 when the iteration's ``move`` [rad] turns

@@ -25,7 +25,9 @@ class IKResult:
 
     ``q`` [rad]; ``residuals`` ‖e_k‖ per priority level (task units);
     ``iterations`` solver iterations in all (IPOPT iterations summed over the
-    levels for the lexicographic solver); ``status`` the solver's own word;
+    levels for the lexicographic solver); ``status`` the solver's own word (IPOPT's, or
+    the nullspace solver's ``converged``, ``max_iterations``, ``stalled`` or ``stalled:
+    level k at a saddle, residual r``: at rest missing a level it could lower);
     ``success`` False whenever the solver failed or a re-check did not pass;
     ``subproblems`` the NLPs solved (lexicographic; 0 for the nullspace solver).
     """
