@@ -138,9 +138,10 @@ def constraint_settings(problem: Problem) -> ConstraintSettings:
 
 
 def adjustment(problem: Problem) -> Adjustment:
-    """The problem's fatigue adjustment: the file's, else the paper's. (The whole-body one is
-    chosen per file for now: on the shipped shelf its equal joint weights let a symmetric
-    hold twist the trunk 42°; docs/comfort.md.)"""
+    """The problem's fatigue adjustment: the file's, else the paper's on every body. (The
+    whole-body one holds longer on the wall and seated problems but, with equal joint
+    weights, turns the trunk 24-41° on the seated, drill and shelf problems: a file chooses
+    it; docs/comfort.md.)"""
     return problem.spec.fatigue.adjustment or "paper"
 
 
