@@ -33,9 +33,10 @@ from casadi_posture.body.support import margin, support_polygon
 from casadi_posture.ergonomics.plausibility import Plausibility, PostureCheck
 from casadi_posture.errors import ProblemError
 from casadi_posture.frames import frame
+from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import cached_solver
-from casadi_posture.ik.tasks import Comfort
+from casadi_posture.ik.tasks import Comfort, JointReference
 from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
@@ -308,6 +309,14 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
             f"{ACHIEVED_TOLERANCE:g} {top.unit}; the task is out of the body's reach or "
             "blocked by a joint limit (positions are in metres)"
         )
+    criteria = _criterion_level(hierarchy)
+    for level in levels[1:]:
+        if not level.achieved and level.level - 1 != criteria:
+            flags.append(
+                f"level {level.level} ({level.tasks}) not achieved: residual "
+                f"{level.residual:.3g} {level.unit} > {ACHIEVED_TOLERANCE:g} {level.unit}; "
+                "the answer is for the nearest posture the body reaches, not the task as given"
+            )
     return StaticAnswer(
         problem,
         answer.torques,
@@ -318,6 +327,15 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
         answer.capable,
         answer.plausibility,
     )
+
+
+def _criterion_level(hierarchy: TaskHierarchy) -> int | None:
+    """The index of the last level when it only settles what the tasks leave free (comfort or
+    joint-reference tasks: minimised, never expected to reach zero); None otherwise."""
+    last = hierarchy.levels[-1]
+    if len(hierarchy.levels) > 1 and all(isinstance(t, Comfort | JointReference) for t in last):
+        return len(hierarchy.levels) - 1
+    return None
 
 
 def _over_strength(groups: Sequence[GroupLoad]) -> list[str]:
