@@ -119,9 +119,9 @@ def test_time_resting_on_a_limit_from_a_timeline() -> None:
 def test_idle_limbs_and_the_task_plane() -> None:
     wall = plausibility(load_problem(WALL))
     assert [limb for limb, _ in wall.idle] == ["shoulder_flexion_l and below"]
-    assert wall.planar and not wall.symmetric
+    assert wall.sagittal and not wall.symmetric
     shelf = plausibility(load_problem(SHELF))
-    assert shelf.idle == [] and not shelf.planar and shelf.symmetric
+    assert shelf.idle == [] and not shelf.sagittal and shelf.symmetric
 
 
 def test_solve_reports_and_flags_the_seated_trunk_leaning_back() -> None:

@@ -118,13 +118,13 @@ class Plausibility:
         busy = {d for f in frames for d in body.ancestors(f)}
         busy |= {d for foot in body.feet for d in body.ancestors(foot.dof)}
         self.idle = _components(body, [d.name for d in body.dofs if d.name not in busy])
-        self.planar = _in_sagittal_planes(tasks)
-        out = set(lateral(body)) | {
+        self.sagittal = _in_sagittal_planes(tasks)
+        self.out_of_plane = [
             i
             for i, d in enumerate(body.dofs)
-            if np.linalg.norm(np.cross(body.axis(d.name), [0.0, 1.0, 0.0])) > 1e-9
-        }
-        self.out_of_plane = sorted(i for i in out if body.dofs[i].name in busy)
+            if d.name in busy
+            and np.linalg.norm(np.cross(body.axis(d.name), [0.0, 1.0, 0.0])) > 1e-9
+        ]
         self.trunk_twist = lateral(body)
         self.trunk, self.flexion_sign = _trunk_pitch(body)
         points = [body.landmark(e) for e in effectors]
@@ -167,7 +167,7 @@ class Plausibility:
             worst, asym_dof = asymmetry(body, q)
             sym = math.degrees(worst)
         plane = plane_dof = None
-        if self.planar and self.out_of_plane:
+        if self.sagittal and self.out_of_plane:
             k = max(self.out_of_plane, key=lambda i: abs(q[i]))
             plane, plane_dof = math.degrees(abs(q[k])), body.dofs[k].name
         idle = []
@@ -199,7 +199,7 @@ class Plausibility:
                 f"{where}: a mirror-symmetric task held asymmetrically ({report.asymmetric_dof} "
                 f"{report.asymmetry_deg:.1f}° from its mirror, > {tolerance:g}°)"
             )
-        if self.symmetric or self.planar:
+        if self.symmetric or self.sagittal:
             limit = _value("trunk_twist")
             for i in self.trunk_twist:
                 if abs(math.degrees(q[i])) > limit:

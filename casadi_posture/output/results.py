@@ -227,7 +227,7 @@ def plausibility_report(result: SimulationResult) -> dict[str, Any]:
     checks = plausibility(result.problem)
     report: dict[str, Any] = {
         "symmetric_task": checks.symmetric,
-        "sagittal_task": checks.planar,
+        "sagittal_task": checks.sagittal,
         "postures": [],
         "held_at_limits": [],
         "flags": [],
