@@ -302,7 +302,8 @@ def _builtin_tree(spec: ProblemSpec, path: Path) -> tuple[TreeSpec, list[Paramet
         expected = "no hip_height_m (it places the fixed pelvis of model 'upper_body' only)"
         raise ProblemError(path, "body.hip_height_m", body_spec.hip_height_m, expected)
     tree, derived = recipe.build(segments, ranges, body_spec)
-    records += derived
+    rebuilt = {record.name for record in derived}  # the builder's own values win
+    records = [record for record in records if record.name not in rebuilt] + derived
 
     groups = [side.name for d in tree.dofs for side in (d.positive, d.negative)]
     _unknown(path, "body.half_joints", body_spec.half_joints, groups)

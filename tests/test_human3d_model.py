@@ -25,7 +25,8 @@ from pinocchio_bodies import pinocchio_model
 
 from casadi_posture import api
 from casadi_posture.biomech.torques import TorqueModel
-from casadi_posture.body import support
+from casadi_posture.body import human, support
+from casadi_posture.body.anthropometry import segment_inertia
 from casadi_posture.cli import main
 from casadi_posture.problem import Problem
 
@@ -58,15 +59,24 @@ DE_LEVA_MASS = {
         "foot": 0.0129,
     },
 }
-DE_LEVA_SHANK = {"male": 0.4340, "female": 0.4323}  # knee centre to lateral malleolus
-DE_LEVA_THIGH = {"male": 0.4222, "female": 0.3685}  # hip centre to knee centre
+# de Leva 1996, Table 4, thigh (hip to knee centre) and shank (knee centre to lateral
+# malleolus): centre of mass from the proximal end, radii of gyration (sagittal, transverse,
+# longitudinal), as fractions of the segment's length.
+DE_LEVA_LEG = {
+    "male": {"thigh": (0.4095, (0.329, 0.329, 0.149)), "shank": (0.4459, (0.255, 0.249, 0.103))},
+    "female": {"thigh": (0.3612, (0.369, 0.364, 0.162)), "shank": (0.4416, (0.271, 0.267, 0.093))},
+}
 DE_LEVA_FOOT = {"male": (0.2581, 0.4415), "female": (0.2283, 0.4014)}  # length, CoM from heel
 
 # ANSUR II (2012) means [m]: stature, acromial height, biacromial breadth, lateral malleolus
-# height, foot length, foot breadth, heel breadth, ball-of-foot length.
+# height, foot length, foot breadth, heel breadth, ball-of-foot length, trochanterion height,
+# knee height (mid-patella), iliocristale height.
 ANSUR = {
     "male": {
         "stature": 1.756,
+        "trochanterion": 0.901,
+        "knee_mid_patella": 0.488,
+        "iliocristale": 1.062,
         "acromial": 1.441,
         "biacromial": 0.4157,
         "malleolus": 0.0729,
@@ -77,6 +87,9 @@ ANSUR = {
     },
     "female": {
         "stature": 1.629,
+        "trochanterion": 0.845,
+        "knee_mid_patella": 0.449,
+        "iliocristale": 0.996,
         "acromial": 1.335,
         "biacromial": 0.3653,
         "malleolus": 0.0627,
@@ -514,9 +527,11 @@ def _expected_centres(sex: str, stature: float) -> dict[str, np.ndarray]:
     shoulder_z = (a["acromial"] - RAB_GH_BELOW_ACROMION * a["biacromial"]) * ansur
     shoulder_y = a["biacromial"] / 2 * ansur
     hip_y = hip_lateral * pw
+    # The hip centre at the trochanterion, the knee's at mid-patella, the ankle's at the
+    # lateral malleolus.
     ankle_z = a["malleolus"] * ansur
-    knee_z = ankle_z + DE_LEVA_SHANK[sex] * de_leva
-    hip_z = knee_z + DE_LEVA_THIGH[sex] * de_leva
+    knee_z = a["knee_mid_patella"] * ansur
+    hip_z = a["trochanterion"] * ansur
     out = {
         "shoulder_r": (0.0, -shoulder_y, shoulder_z),
         "shoulder_l": (0.0, shoulder_y, shoulder_z),
@@ -543,6 +558,66 @@ def test_joint_centres_at_zero_posture(model: str, sex: str) -> None:
     assert set(names) <= set(got)
     for name in names:
         assert np.max(np.abs(got[name] - expected[name])) < 1e-6, (name, got[name])
+
+
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_leg_centres_at_ansur_landmarks_at_the_ansur_mean_stature(sex: str) -> None:
+    """At ANSUR II's mean stature the hip centres stand at the mean trochanterion height and
+    the knees' at the mean knee height (mid-patella); a woman's L5/S1 lies less than 60 mm
+    below her mean iliocristale height (the iliac crest's top is about at L4/L5)."""
+    a = ANSUR[sex]
+    got = _landmarks(_problem("standing", sex, a["stature"], mass=70.0))
+    for side in ("r", "l"):
+        assert got[f"hip_{side}"][Z] == pytest.approx(a["trochanterion"], abs=1e-9)
+        assert got[f"knee_{side}"][Z] == pytest.approx(a["knee_mid_patella"], abs=1e-9)
+        assert got[f"ankle_{side}"][Z] == pytest.approx(a["malleolus"], abs=1e-9)
+    if sex == "female":
+        assert 0.0 < a["iliocristale"] - got["l5s1"][Z] < 0.060
+
+
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_thigh_and_shank_span_the_joint_centres(sex: str) -> None:
+    """The thigh runs from hip to knee centre and the shank from knee centre to ankle, their
+    centres of mass and radii of gyration at de Leva's fractions of those lengths, their
+    masses de Leva's; the builder's records say so."""
+    stature, mass = 1.70, 65.0
+    a, scale = ANSUR[sex], 1.70 / ANSUR[sex]["stature"]
+    hip, knee, ankle = (a[k] * scale for k in ("trochanterion", "knee_mid_patella", "malleolus"))
+    problem = _problem("standing", sex, stature, mass=mass)
+    segments = {s.name: s for s in problem.body.segments}
+    body = problem.spec.body
+    inertia = {
+        n: segment_inertia(n, sex=sex, stature=stature, body_mass=mass) for n in human.SEGMENTS
+    }
+    ranges = {d: (-180.0, 180.0) for d in human.dof_names("standing")}
+    records = {r.name: r for r in human.standing(inertia, ranges, body)[1]}
+    for name, top, length in (("thigh", hip, hip - knee), ("shank", knee, knee - ankle)):
+        com, radii = DE_LEVA_LEG[sex][name]
+        for side in ("r", "l"):
+            segment = segments[f"{name}_{side}"]
+            assert segment.com[Z] == pytest.approx(top - com * length, abs=1e-9)
+            assert segment.mass == pytest.approx(DE_LEVA_MASS[sex][name] * mass, abs=1e-9)
+        assert records[f"segment.{name}.length"].value == pytest.approx(length, abs=1e-12)
+        assert records[f"segment.{name}.length"].status == "estimate"
+        assert records[f"segment.{name}.com_distance"].value == pytest.approx(com * length)
+        for axis, fraction in zip(("sagittal", "transverse", "longitudinal"), radii, strict=True):
+            record = records[f"segment.{name}.radius_of_gyration.{axis}"]
+            assert record.value == pytest.approx(fraction * length, abs=1e-9)
+    hip_record = records["body.hip_height"]
+    assert hip_record.value == pytest.approx(hip, abs=1e-6)
+    assert "trochanterion" in hip_record.source and hip_record.status == "estimate"
+
+
+def test_a_given_leg_length_moves_the_centres_above() -> None:
+    """A problem file's thigh length stands the hips on it (the knee stays at ANSUR's)."""
+    a, stature = ANSUR["male"], REFERENCE["male"][0]
+    text = _text("standing").replace(
+        "[[tasks]]", "[body.segments.thigh]\nlength_m = 0.45\n[[tasks]]"
+    )
+    got = _landmarks(api.loads(text))
+    knee = a["knee_mid_patella"] * stature / a["stature"]
+    assert got["knee_r"][Z] == pytest.approx(knee, abs=1e-9)
+    assert got["hip_r"][Z] == pytest.approx(knee + 0.45, abs=1e-9)
 
 
 @pytest.mark.parametrize("model", ["standing", "upper_body"])

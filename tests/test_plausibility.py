@@ -124,15 +124,20 @@ def test_idle_limbs_and_the_task_plane() -> None:
     assert shelf.idle == [] and not shelf.sagittal and shelf.symmetric
 
 
-def test_solve_reports_and_flags_the_seated_trunk_leaning_back() -> None:
-    """The seated assembly's IK posture extends the lumbar spine 11° while the hand works
-    0.46 m ahead: solve flags it (exit 1) and its JSON carries the report."""
-    result = CliRunner().invoke(main, ["solve", str(PROBLEMS / "seated_assembly.toml"), "--json"])
+def test_torques_reports_and_flags_a_seated_trunk_leaning_back() -> None:
+    """Seated, the lumbar spine extended 15° with the arm raised to the table: the hand works
+    0.53 m ahead of the lumbar joint, so torques flags it (exit 1) and its JSON carries the
+    report; the IK's own posture (9.9° of extension) is not flagged."""
+    seated = str(PROBLEMS / "seated_assembly.toml")
+    lean = ["--posture", "lumbar_flexion=-15", "--posture", "shoulder_flexion_r=70"]
+    result = CliRunner().invoke(main, ["torques", seated, *lean, "--json"])
     assert result.exit_code == 1, result.output
     data = json.loads(result.stdout)
     report = data["plausibility"]
-    assert any("leans back" in f for f in report["flags"])
+    assert any("leans back (15°" in f for f in report["flags"])
     assert set(report["flags"]) <= set(data["flags"])
     assert report["idle_limbs"][0]["limb"] == "shoulder_flexion_l and below"
+    solved = CliRunner().invoke(main, ["solve", seated, "--json"])
+    assert solved.exit_code == 0, solved.output
     shelf = CliRunner().invoke(main, ["solve", str(SHELF), "--json"])
     assert json.loads(shelf.stdout)["plausibility"]["asymmetry_deg"] < 1.0

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from importlib import resources
 from typing import Any, Literal, Protocol, get_args
@@ -149,5 +149,34 @@ def segment_inertia(name: str, *, sex: Sex, stature: float, body_mass: float) ->
         radii_of_gyration=radii,
         proximal=end_points["proximal"],
         distal=end_points["distal"],
+        parameters=records,
+    )
+
+
+def resized(segment: SegmentInertia, length: Parameter) -> SegmentInertia:
+    """``segment`` at the ``length`` [m] of another source: its centre of mass and radii of
+    gyration keep their fractions of the length, its mass stays."""
+    scale = length.value / segment.length
+    ratio = f", × length {length.value:.4g} m / {segment.length:.4g} m"
+
+    def scaled(record: Parameter) -> Parameter:
+        return replace(
+            record,
+            value=record.value * scale,
+            source=record.source + ratio,
+            status=length.status,
+            evidence="+".join(dict.fromkeys((record.evidence, length.evidence))),
+        )
+
+    kept = (f"segment.{segment.name}.length", f"segment.{segment.name}.mass")
+    records = tuple(
+        length if r.name == kept[0] else r if r.name == kept[1] else scaled(r)
+        for r in segment.parameters
+    )
+    sagittal, transverse, longitudinal = (r * scale for r in segment.radii_of_gyration)
+    return replace(
+        segment,
+        length=length.value,
+        radii_of_gyration=(sagittal, transverse, longitudinal),
         parameters=records,
     )

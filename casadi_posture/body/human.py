@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from casadi_posture.body.anthropometry import SegmentGeometry
+from casadi_posture.body.anthropometry import SegmentGeometry, SegmentInertia, resized
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import Parameter
 from casadi_posture.spec.schema import (
@@ -144,36 +144,59 @@ class Skeleton:
     toe_half_width: float
 
 
+def _source(name: str) -> Parameter:
+    return parameters.load("joint_centres")[f"joint_centres.{name}"]
+
+
+def _derived(name: str, value: float, derivation: str, *sources: Parameter) -> Parameter:
+    """The record of ``name`` [m] derived from ``sources`` (verified only if all of them are)."""
+    status = "verified" if all(s.status == "verified" for s in sources) else "estimate"
+    return Parameter(
+        name,
+        round(value, 6),
+        "m",
+        f"{derivation} ({'; '.join(dict.fromkeys(s.source for s in sources))})",
+        status,
+        "+".join(dict.fromkeys(s.evidence for s in sources if s.evidence)) + "+X",
+    )
+
+
+# The leg's joint centres standing: the ANSUR II landmark each lies at, its name, and the
+# offset of the centre below it.
+_CENTRES = {
+    "knee": ("knee_height_mid_patella", "knee height, mid-patella", "knee_below_mid_patella"),
+    "hip": ("trochanterion_height", "trochanterion height", "hip_below_trochanterion"),
+}
+
+
+def _given_length(geometry: SegmentGeometry) -> bool:
+    """Whether ``geometry``'s length is the problem file's (or carries no record)."""
+    if not isinstance(geometry, SegmentInertia):
+        return True
+    return any(p.status == "user" for p in geometry.parameters if p.name.endswith(".length"))
+
+
 def skeleton(
     body: BodySpec, segments: Mapping[str, SegmentGeometry], hip_height: float | None = None
-) -> tuple[Skeleton, list[Parameter]]:
-    """The joint centres of ``body`` (sex, stature) and the records of their derivation.
+) -> tuple[Skeleton, dict[str, SegmentGeometry], list[Parameter]]:
+    """The joint centres of ``body`` (sex, stature), its segments with the shank and thigh
+    as long as the distances between the leg's joint centres, and the records of their
+    derivation.
 
-    ``hip_height`` [m] moves the hips (and all above) to that height above the floor (a
-    seated ``upper_body``); by default they stand on the legs' segments."""
+    Standing, the ankle, knee and hip centres lie at ANSUR II landmarks scaled by stature
+    (``_CENTRES``) unless the problem file gives a leg segment's length; then the centres
+    above stand on it. ``hip_height`` [m] moves the hips (and all above) to that height above
+    the floor (a seated ``upper_body``)."""
     sex, stature = body.sex, body.stature_m
-    table = parameters.load("joint_centres")
     records: list[Parameter] = []
-
-    def source(name: str) -> Parameter:
-        return table[f"joint_centres.{name}"]
+    source = _source
 
     def ansur(name: str) -> float:
         scale = stature / source(f"ansur_2.{sex}.stature").value
         return source(f"ansur_2.{sex}.{name}").value * scale
 
     def record(name: str, value: float, derivation: str, *sources: Parameter) -> float:
-        status = "verified" if all(s.status == "verified" for s in sources) else "estimate"
-        records.append(
-            Parameter(
-                f"body.{name}",
-                round(value, 6),
-                "m",
-                f"{derivation} ({'; '.join(dict.fromkeys(s.source for s in sources))})",
-                status,
-                "+".join(dict.fromkeys(s.evidence for s in sources)) + "+X",
-            )
-        )
+        records.append(_derived(f"body.{name}", value, derivation, *sources))
         return value
 
     ansur_ref = source(f"ansur_2.{sex}.stature")
@@ -181,24 +204,62 @@ def skeleton(
     reed = f"reed_1999.{sex}"
     pw = source(f"{reed}.pelvis_width").value * stature / source(f"{reed}.stature").value
     reed_source = source(f"{reed}.pelvis_width")
-    leg = segments["shank"].length + segments["thigh"].length
-    ankle = record(
-        "ankle_height",
-        ansur("lateral_malleolus_height"),
-        f"ANSUR II mean lateral malleolus height {per}",
-        source(f"ansur_2.{sex}.lateral_malleolus_height"),
-    )
-    standing_hip = ankle + leg
+    heights = {"ankle": ansur("lateral_malleolus_height")}
+    derived = {
+        "ankle": _derived(
+            "body.ankle_height",
+            heights["ankle"],
+            f"ANSUR II mean lateral malleolus height {per}",
+            source(f"ansur_2.{sex}.lateral_malleolus_height"),
+        )
+    }
+    legs = dict(segments)
+    for name, top, bottom in (("shank", "knee", "ankle"), ("thigh", "hip", "knee")):
+        geometry = segments[name]
+        if _given_length(geometry):
+            heights[top] = heights[bottom] + geometry.length
+            derived[top] = _derived(
+                f"body.{top}_height",
+                heights[top],
+                f"{bottom} height + the given {name} length {geometry.length:g} m",
+                derived[bottom],
+            )
+            continue
+        landmark, label, offset = _CENTRES[top]
+        measured, below = source(f"ansur_2.{sex}.{landmark}"), source(f"landmark_centres.{offset}")
+        heights[top] = ansur(landmark) - below.value
+        derived[top] = _derived(
+            f"body.{top}_height",
+            heights[top],
+            f"ANSUR II mean {label} {measured.value:g} m {per},"
+            f" the {top} centre {below.value:g} m below it",
+            measured,
+            below,
+        )
+        length = heights[top] - heights[bottom]
+        legs[name] = resized(
+            geometry,
+            Parameter(
+                f"segment.{name}.length",
+                length,
+                "m",
+                f"{top} centre height − {bottom} centre height standing"
+                f" (body.{top}_height − body.{bottom}_height)",
+                "estimate",
+                derived[top].evidence,
+            ),
+        )
+        records += legs[name].parameters
+    records += [derived["ankle"], derived["knee"]]
+    ankle, knee, standing_hip = heights["ankle"], heights["knee"], heights["hip"]
     hip = standing_hip if hip_height is None else hip_height
     lift = hip - standing_hip
-    record(
-        "hip_height",
-        hip,
-        "ankle height + de Leva shank (knee to lateral malleolus) and thigh lengths"
-        if hip_height is None
-        else "the file's body.hip_height_m",
-        source(f"ansur_2.{sex}.lateral_malleolus_height"),
-    )
+    if hip_height is None:
+        records.append(derived["hip"])
+    else:
+        records.append(
+            Parameter("body.hip_height", hip, "m", "the file's body.hip_height_m", "user")
+        )
     hip_half = record(
         "hip_half_width",
         source(f"{reed}.hip_lateral").value * pw,
@@ -259,7 +320,7 @@ def skeleton(
     return (
         Skeleton(
             ankle_height=ankle,
-            knee_height=ankle + segments["shank"].length + lift,
+            knee_height=knee + lift,
             hip_height=hip,
             hip_half_width=hip_half,
             l5s1=(-back, 0.0, hip + up),
@@ -275,6 +336,7 @@ def skeleton(
             ball_half_width=foot_breadth / 2,
             toe_half_width=source(f"{estimate}.toe_width").value * foot_breadth / 2,
         ),
+        legs,
         records,
     )
 
@@ -490,7 +552,7 @@ def upper_body(
 ) -> tuple[TreeSpec, list[Parameter]]:
     """The body above the hips, pelvis fixed to the world (seated, or standing with the
     pelvis held): lumbar 3 DOF, two arms of 7."""
-    sk, records = skeleton(body, segments, body.hip_height_m)
+    sk, segments, records = skeleton(body, segments, body.hip_height_m)
     t = _Tree(ranges)
     thorax = _trunk(t, sk, segments, None)
     for side in SIDES:
@@ -505,7 +567,7 @@ def standing(
 ) -> tuple[TreeSpec, list[Parameter]]:
     """The whole body standing: the upper body on two legs (hip 3, knee, ankle 2 per side),
     the right foot fixed to the world, the left one kept on the floor by a task."""
-    sk, records = skeleton(body, segments)
+    sk, segments, records = skeleton(body, segments)
     t = _Tree(ranges)
     right = _leg_points(sk, "r")
     origins = {"hip": right["hip"], "knee": right["knee"], "ankle": right["ankle"]}

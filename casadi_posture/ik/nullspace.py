@@ -198,30 +198,28 @@ FLOOR_RAISE = 4.0
 FLOOR_LOWER = 2.0
 FLOOR_CAP = 1e4
 
-#: A level below the first comes to rest out of reach where J̃_k loses rank: its gradient
-#: J̃_kᵀe_k vanishes with e_k ≠ 0, so e_k lies along a left singular vector whose singular
-#: value s goes to zero at the rest (in proportion to the distance d from it). The motions
-#: the levels below may use, Z_k, leave out that singular vector's right one, v, which turns
-#: inside the nullspace at a rate of about 1/s = 1/d per radian of q: a level below pushing
-#: against level k (the comfort level) is projected on a subspace that swings with every
-#: iterate, and the iteration cannot settle. When the part of r_k that the well-conditioned
-#: directions see (s² ≥ μ_k, not lifted by the floor) is at most ``OUT_OF_REACH`` of ‖r_k‖²
-#: and ‖r_k‖ is above ``ACHIEVED_TOLERANCE``, level k is at rest out of reach and the sweep
-#: stops there: the levels below wait while it re-converges (they moved it there, on the
-#: way). Its fixed points are the paper's fixed points of levels 1..k (first-order minima of
-#: level k with the levels above kept; the saddle and KKT checks still apply). Measured on
-#: the standing body, a 1.65 m woman's hands at a shelf 1.6 m high and 0.62 m ahead (out of
-#: reach; tests/test_nullspace_status.py): at the lexicographic solver's answer, the hands
-#: 0.0977 m off with the arms straight, J̃_2's smallest singular value is 5.5e-5 and carries
-#: the whole residual, and the comfort level's step turns the iteration with an eigenvalue
-#: of -176 (wrist flexion); the run oscillated with steps of 0.02 to 0.4 rad, level 1 broken
-#: by 1e-5 to 4e-3 m, and ended ``stalled`` at its start (62 iterations; allowed 3000, with
-#: a floor kept from falling back below where it reversed, it still wandered with steps of
-#: 2e-5 rad). Now: converged in 26 iterations, the hands 0.0976738 m off (the lexicographic
-#: solver: 0.0976739), no joint more than 0.36° from its posture. The test also holds on
-#: the way (5 of the 67 sweeps from the 42-DOF benchmark body's upright start: 88
-#: iterations instead of 70, ending in the lexicographic solver's comfort minimum, 1.306
-#: instead of 1.409).
+#: A level below the first comes to rest out of reach where J̃_k loses rank: its gradient J̃_kᵀe_k
+#: vanishes with e_k ≠ 0, so e_k lies along a left singular vector whose singular value s goes to
+#: zero at the rest (in proportion to the distance d from it). The motions the levels below may use,
+#: Z_k, leave out that singular vector's right one, v, which turns inside the nullspace at a rate of
+#: about 1/s = 1/d per radian of q: a level below pushing against level k (the comfort level) is
+#: projected on a subspace that swings with every iterate, and the iteration cannot settle. When the
+#: part of r_k that the well-conditioned directions see (s² ≥ μ_k, not lifted by the floor) is at
+#: most ``OUT_OF_REACH`` of ‖r_k‖² and ‖r_k‖ is above ``ACHIEVED_TOLERANCE``, level k is at rest out
+#: of reach and the sweep stops there: the levels below wait while it re-converges (they moved it
+#: there, on the way). Its fixed points are the paper's fixed points of levels 1..k (first-order
+#: minima of level k with the levels above kept; the saddle and KKT checks still apply). Measured on
+#: the standing body, a 1.65 m woman's hands at a shelf 1.6 m high and 0.62 m ahead (out of reach;
+#: tests/test_nullspace_status.py; measured with the earlier de Leva leg lengths): at the
+#: lexicographic solver's answer, the hands 0.0977 m off with the arms straight, J̃_2's smallest
+#: singular value is 5.5e-5 and carries the whole residual, and the comfort level's step turns the
+#: iteration with an eigenvalue of -176 (wrist flexion); the run oscillated with steps of 0.02 to
+#: 0.4 rad, level 1 broken by 1e-5 to 4e-3 m, and ended ``stalled`` at its start (62 iterations;
+#: allowed 3000, with a floor kept from falling back below where it reversed, it still wandered with
+#: steps of 2e-5 rad). Now: converged in 26 iterations, the hands 0.0976738 m off (the lexicographic
+#: solver: 0.0976739), no joint more than 0.36° from its posture. The test also holds on the way (5
+#: of the 67 sweeps from the 42-DOF benchmark body's upright start: 88 iterations instead of 70,
+#: ending in the lexicographic solver's comfort minimum, 1.306 instead of 1.409).
 OUT_OF_REACH = 1e-2
 
 

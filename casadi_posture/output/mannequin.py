@@ -82,8 +82,8 @@ _PELVIS = (
 _PELVIS_ENDS = (0.01, 0.06)
 
 #: The legs of the upper body, drawn for context: thigh and shank lengths, ankle height,
-#: heel behind and toes ahead of the ankle [m] (the standing body's for the reference man).
-_LEGS = (0.4258, 0.4377, 0.0729, 0.0543, 0.2169)
+#: heel behind and toes ahead of the ankle [m] (the standing body's for ANSUR II's mean man).
+_LEGS = (0.4130, 0.4151, 0.0729, 0.0543, 0.2169)
 
 #: A seated upper body's stool [m]: the hip joint centres above its top (as
 #: docs/problem-files.md's 0.55 m hips on a 0.46 m seat), its centre ahead of them, its
