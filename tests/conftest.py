@@ -11,6 +11,18 @@ from casadi_posture.body.tree import BodyModel, Dof, Landmark, Segment
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
+#: The shipped shelf scenario for a 1.65 m, 60 kg woman with the shelf raised to 1.6 m: the
+#: hands cannot reach it (0.62 m ahead) and rest 0.104 m short with the arms straight.
+SHORT_REACH = {
+    "body.sex": "female",
+    "body.stature_m": 1.65,
+    "body.mass_kg": 60.0,
+    "loads[0].mass_kg": 2.5,
+    "loads[1].mass_kg": 2.5,
+    "tasks[2].target_m[2]": 1.6,
+    "tasks[3].target_m[2]": 1.6,
+}
+
 
 @pytest.fixture
 def problems_dir() -> Path:

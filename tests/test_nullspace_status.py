@@ -15,6 +15,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import trees
+from conftest import PROBLEMS, SHORT_REACH
 from scaling import NumpyReference
 
 import casadi_posture.ik.nullspace as nullspace
@@ -121,28 +122,13 @@ def test_a_bound_that_level_1_rests_against_converges_with_the_lexicographic_opt
     assert result.residuals[0] > 0.02  # the bound keeps the wrist off its target
 
 
-#: The shipped shelf scenario for a 1.65 m, 60 kg woman with the shelf raised to 1.6 m: the
-#: hands cannot reach it (0.62 m ahead) and rest 0.1036 m short with the arms straight.
-SHORT_REACH = {
-    "body.sex": "female",
-    "body.stature_m": 1.65,
-    "body.mass_kg": 60.0,
-    "loads[0].mass_kg": 2.5,
-    "loads[1].mass_kg": 2.5,
-    "tasks[2].target_m[2]": 1.6,
-    "tasks[3].target_m[2]": 1.6,
-}
-
-
 def test_a_level_out_of_reach_converges_to_the_lexicographic_minimum() -> None:
     """Level 2 out of reach above the comfort level: the run ended ``stalled`` at its start
     (the hands 0.638 m off) while the comfort level, projected on a nullspace that turns
     with every iterate near the straight-arm singularity, kept it oscillating. It converges
     to the lexicographic solver's minimum: feet and balance kept, the hands as close as
     they get (0.1036 m), knees and elbows at their limits."""
-    problem = load_problem(
-        Path(__file__).resolve().parents[1] / "problems/standing_shelf_box.toml", SHORT_REACH
-    )
+    problem = load_problem(PROBLEMS / "standing_shelf_box.toml", SHORT_REACH)
     hierarchy = problem.hierarchy()
     result = NullspaceSolver(hierarchy).solve(problem.posture)
     best = LexicographicSolver(hierarchy).solve(problem.posture)

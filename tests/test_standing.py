@@ -9,7 +9,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
-from conftest import PROBLEMS
+from conftest import PROBLEMS, SHORT_REACH
 
 from casadi_posture.ik.solvers import cached_solver
 from casadi_posture.problem import load_problem, problem_from_data
@@ -156,16 +156,7 @@ def test_a_shelf_out_of_reach_is_flagged_by_both_solvers() -> None:
     answer says the hands' level is not achieved; the comfort level below is no task."""
     from casadi_posture.static import solve
 
-    overrides = {
-        "body.sex": "female",
-        "body.stature_m": 1.65,
-        "body.mass_kg": 60.0,
-        "loads[0].mass_kg": 2.5,
-        "loads[1].mass_kg": 2.5,
-        "tasks[2].target_m[2]": 1.6,
-        "tasks[3].target_m[2]": 1.6,
-    }
-    problem = load_problem(PROBLEMS / "standing_shelf_box.toml", overrides)
+    problem = load_problem(PROBLEMS / "standing_shelf_box.toml", SHORT_REACH)
     answers = [solve(problem, name) for name in ("nullspace", "lexicographic")]
     for answer in answers:
         assert answer.ik.success, answer.ik.status

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import casadi as ca
@@ -127,15 +128,7 @@ class Plausibility:
         ]
         self.trunk_twist = lateral(body)
         self.trunk, self.flexion_sign = _trunk_pitch(body)
-        points = [body.landmark(e) for e in effectors]
-        if self.trunk is not None and points:
-            dof = body.dofs[self.trunk]
-            centre = body.point(dof.name, dof.origin)
-            self._ahead = ca.Function(
-                "ahead", [body.q], [ca.horzcat(*[p[0] - centre[0] for p in points])]
-            )
-        else:
-            self._ahead = None
+        self._ahead = _ahead_function(body, tuple(effectors), self.trunk)
         self.lower, self.upper = body.lower, body.upper
         self.range = self.upper - self.lower
         self.near, self.at = _value("near_limit"), _value("at_limit")
@@ -208,7 +201,7 @@ class Plausibility:
                         f"{math.degrees(q[i]):+.0f}°, > {limit:g}°) where the task asks for "
                         "neither (RULA/REBA score it)"
                     )
-        if self.trunk is not None and self._ahead is not None:
+        if self._ahead is not None:
             extension = -self.flexion_sign * math.degrees(q[self.trunk])
             ahead = float(np.max(np.asarray(self._ahead(q))))
             if extension > _value("trunk_extension") and ahead >= _value("reach_ahead"):
@@ -252,6 +245,20 @@ class Plausibility:
             for h in held
             if h["seconds"] >= most
         ]
+
+
+@lru_cache(maxsize=32)
+def _ahead_function(
+    body: BodyModel, effectors: tuple[str, ...], trunk: int | None
+) -> ca.Function | None:
+    """``ahead(q)``: how far [m] each effector lies ahead (x) of the trunk's flexion joint,
+    built once per body and effectors; None without a trunk or effectors."""
+    if trunk is None or not effectors:
+        return None
+    dof = body.dofs[trunk]
+    centre = body.point(dof.name, dof.origin)
+    ahead = [body.landmark(e)[0] - centre[0] for e in effectors]
+    return ca.Function("ahead", [body.q], [ca.horzcat(*ahead)])
 
 
 def _trunk_pitch(body: BodyModel) -> tuple[int | None, float]:

@@ -42,6 +42,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
     """
     tl, problem = result.timeline, result.problem
     body, settings = problem.body, result.settings
+    plausible = plausibility_report(result)
     ran = tl.time.size > 0
     simulated = float(tl.time[-1]) if ran else 0.0
     groups = []
@@ -120,8 +121,8 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "keep_levels": result.settings.keep_levels,
         "schedule": schedule_summary(result),
         "balance_margin_min_m": balance_margin_min(result),
-        "plausibility": plausibility_report(result),
-        "flags": flags(result),
+        "plausibility": plausible,
+        "flags": flags(result, plausible),
         "solver_statistics": {
             "steps": int(tl.time.size),
             "steps_by_solver": dict(Counter(s for s in tl.solver if s)),
@@ -190,8 +191,9 @@ def _task(result: SimulationResult) -> dict[str, Any]:
     }
 
 
-def flags(result: SimulationResult) -> list[str]:
-    """Why the run's answer cannot be used as it is, one line each (empty: it can)."""
+def flags(result: SimulationResult, plausible: dict[str, Any]) -> list[str]:
+    """Why the run's answer cannot be used as it is, one line each (empty: it can);
+    ``plausible`` is the run's :func:`plausibility_report`."""
     tl, out = result.timeline, []
     if result.stop == "interrupted":
         out.append(f"interrupted at {tl.time[-1] if tl.time.size else 0.0:g} s: a partial run")
@@ -208,7 +210,7 @@ def flags(result: SimulationResult) -> list[str]:
         out.append(f"over strength at the start ({names}): the posture cannot be held at all")
     if result.ik_failures:
         out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
-    out += plausibility_report(result)["flags"]
+    out += plausible["flags"]
     margin = balance_margin_min(result)
     if margin is not None and margin < 0:
         lost = tl.time[np.argmax(tl.balance[1] < 0)]
