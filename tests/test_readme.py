@@ -1,4 +1,5 @@
-"""Every ``$ casadi-posture ...`` example in the README prints what the README shows."""
+"""Every ``$ casadi-posture ...`` console example in the README and docs/ prints what the
+document shows."""
 
 from __future__ import annotations
 
@@ -14,9 +15,20 @@ from casadi_posture.cli import main
 ROOT = Path(__file__).resolve().parents[1]
 
 
+DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
 def _examples() -> list[tuple[str, str]]:
+    examples = []
+    for document in DOCUMENTS:
+        examples += _console_examples(document.read_text())
+    return examples
+
+
+def _console_examples(text: str) -> list[tuple[str, str]]:
+    """Each command of a ```console block and the lines it prints."""
     examples, command, lines, in_block = [], None, [], False
-    for line in (ROOT / "README.md").read_text().splitlines():
+    for line in text.splitlines():
         if line.startswith("```console"):
             in_block = True
             continue
