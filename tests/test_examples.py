@@ -47,7 +47,7 @@ def test_wall_protocol(capsys: pytest.CaptureFixture[str]) -> None:
     problem = cp.load(wall.PROBLEMS / "standing_wall_horizontal.toml")
     height, distance = (float(v) for v in wall.wrist_position(problem)(problem.posture))
     # The file puts the dot 1.108625 m above the floor, 0.35 m ahead of and 0.25 m below
-    # the shoulder's centre (the 2-DOF arm's angles put the wrist there).
+    # the shoulder's centre (the file's arm angles put the wrist there).
     assert height == pytest.approx(1.108625, abs=1e-6)
     assert distance == pytest.approx(math.hypot(0.35, 0.25), abs=1e-4)
     rows = wall.main(duration_s=60.0, lines=wall.LINES[:1], variants=wall.VARIANTS[:1])

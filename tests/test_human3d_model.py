@@ -66,11 +66,24 @@ DE_LEVA_LEG = {
     "male": {"thigh": (0.4095, (0.329, 0.329, 0.149)), "shank": (0.4459, (0.255, 0.249, 0.103))},
     "female": {"thigh": (0.3612, (0.369, 0.364, 0.162)), "shank": (0.4416, (0.271, 0.267, 0.093))},
 }
+# de Leva 1996, Table 4, upper arm (shoulder to elbow centre) and forearm (elbow to wrist
+# centre), as DE_LEVA_LEG.
+DE_LEVA_ARM = {
+    "male": {
+        "upper_arm": (0.5772, (0.285, 0.269, 0.158)),
+        "forearm": (0.4574, (0.276, 0.265, 0.121)),
+    },
+    "female": {
+        "upper_arm": (0.5754, (0.278, 0.260, 0.148)),
+        "forearm": (0.4559, (0.261, 0.257, 0.094)),
+    },
+}
 DE_LEVA_FOOT = {"male": (0.2581, 0.4415), "female": (0.2283, 0.4014)}  # length, CoM from heel
 
 # ANSUR II (2012) means [m]: stature, acromial height, biacromial breadth, lateral malleolus
 # height, foot length, foot breadth, heel breadth, ball-of-foot length, trochanterion height,
-# knee height (mid-patella), iliocristale height.
+# knee height (mid-patella), iliocristale height, acromion–radiale and radiale–stylion lengths,
+# and wrist height (floor to stylion, arms hanging), which the model does not use.
 ANSUR = {
     "male": {
         "stature": 1.756,
@@ -84,6 +97,9 @@ ANSUR = {
         "foot_breadth": 0.1019,
         "heel_breadth": 0.0725,
         "ball_length": 0.2009,
+        "acromion_radiale": 0.3352,
+        "radiale_stylion": 0.2679,
+        "wrist": 0.8475,
     },
     "female": {
         "stature": 1.629,
@@ -97,6 +113,9 @@ ANSUR = {
         "foot_breadth": 0.0927,
         "heel_breadth": 0.0672,
         "ball_length": 0.1821,
+        "acromion_radiale": 0.3112,
+        "radiale_stylion": 0.2413,
+        "wrist": 0.7942,
     },
 }
 RAB_GH_BELOW_ACROMION = 0.17  # Rab 2002, × biacromial breadth
@@ -532,8 +551,15 @@ def _expected_centres(sex: str, stature: float) -> dict[str, np.ndarray]:
     ankle_z = a["malleolus"] * ansur
     knee_z = a["knee_mid_patella"] * ansur
     hip_z = a["trochanterion"] * ansur
+    # The arm hangs straight: the elbow centre at radiale, the wrist's at stylion.
+    elbow_z = (a["acromial"] - a["acromion_radiale"]) * ansur
+    wrist_z = elbow_z - a["radiale_stylion"] * ansur
     out = {
         "shoulder_r": (0.0, -shoulder_y, shoulder_z),
+        "elbow_r": (0.0, -shoulder_y, elbow_z),
+        "elbow_l": (0.0, shoulder_y, elbow_z),
+        "wrist_r": (0.0, -shoulder_y, wrist_z),
+        "wrist_l": (0.0, shoulder_y, wrist_z),
         "shoulder_l": (0.0, shoulder_y, shoulder_z),
         "hip_r": (0.0, -hip_y, hip_z),
         "hip_l": (0.0, hip_y, hip_z),
@@ -576,13 +602,32 @@ def test_leg_centres_at_ansur_landmarks_at_the_ansur_mean_stature(sex: str) -> N
 
 
 @pytest.mark.parametrize("sex", ["male", "female"])
-def test_thigh_and_shank_span_the_joint_centres(sex: str) -> None:
-    """The thigh runs from hip to knee centre and the shank from knee centre to ankle, their
+def test_arm_centres_against_ansur_at_the_ansur_mean_stature(sex: str) -> None:
+    """At ANSUR II's mean stature the elbow centres stand at the mean radiale height, the
+    forearm is the mean radiale–stylion length, and the wrist centres of the straight hanging
+    arm lie within 15 mm below the survey's mean wrist height, measured on relaxed arms that
+    hang a little bent and away from the body (a measurement the model does not use)."""
+    a = ANSUR[sex]
+    got = _landmarks(_problem("standing", sex, a["stature"], mass=70.0))
+    for side in ("r", "l"):
+        elbow, wrist = got[f"elbow_{side}"][Z], got[f"wrist_{side}"][Z]
+        assert elbow == pytest.approx(a["acromial"] - a["acromion_radiale"], abs=1e-9)
+        assert elbow - wrist == pytest.approx(a["radiale_stylion"], abs=1e-9)
+        assert 0.0 < a["wrist"] - wrist < 0.015
+
+
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_limb_segments_span_the_joint_centres(sex: str) -> None:
+    """The thigh runs from hip to knee centre, the shank from knee centre to ankle, the upper
+    arm from shoulder to elbow centre and the forearm from elbow to wrist centre, their
     centres of mass and radii of gyration at de Leva's fractions of those lengths, their
     masses de Leva's; the builder's records say so."""
     stature, mass = 1.70, 65.0
     a, scale = ANSUR[sex], 1.70 / ANSUR[sex]["stature"]
     hip, knee, ankle = (a[k] * scale for k in ("trochanterion", "knee_mid_patella", "malleolus"))
+    shoulder = (a["acromial"] - RAB_GH_BELOW_ACROMION * a["biacromial"]) * scale
+    elbow = (a["acromial"] - a["acromion_radiale"]) * scale
+    wrist = elbow - a["radiale_stylion"] * scale
     problem = _problem("standing", sex, stature, mass=mass)
     segments = {s.name: s for s in problem.body.segments}
     body = problem.spec.body
@@ -591,8 +636,15 @@ def test_thigh_and_shank_span_the_joint_centres(sex: str) -> None:
     }
     ranges = {d: (-180.0, 180.0) for d in human.dof_names("standing")}
     records = {r.name: r for r in human.standing(inertia, ranges, body)[1]}
-    for name, top, length in (("thigh", hip, hip - knee), ("shank", knee, knee - ankle)):
-        com, radii = DE_LEVA_LEG[sex][name]
+    spans = (
+        ("thigh", hip, hip - knee),
+        ("shank", knee, knee - ankle),
+        ("upper_arm", shoulder, shoulder - elbow),
+        ("forearm", elbow, elbow - wrist),
+    )
+    fractions = DE_LEVA_LEG[sex] | DE_LEVA_ARM[sex]
+    for name, top, length in spans:
+        com, radii = fractions[name]
         for side in ("r", "l"):
             segment = segments[f"{name}_{side}"]
             assert segment.com[Z] == pytest.approx(top - com * length, abs=1e-9)
@@ -618,6 +670,18 @@ def test_a_given_leg_length_moves_the_centres_above() -> None:
     knee = a["knee_mid_patella"] * stature / a["stature"]
     assert got["knee_r"][Z] == pytest.approx(knee, abs=1e-9)
     assert got["hip_r"][Z] == pytest.approx(knee + 0.45, abs=1e-9)
+
+
+def test_a_given_forearm_length_moves_the_wrist() -> None:
+    """A problem file's forearm length hangs the wrist from the elbow (which stays)."""
+    a, stature = ANSUR["male"], REFERENCE["male"][0]
+    text = _text("standing").replace(
+        "[[tasks]]", "[body.segments.forearm]\nlength_m = 0.30\n[[tasks]]"
+    )
+    got = _landmarks(api.loads(text))
+    elbow = (a["acromial"] - a["acromion_radiale"]) * stature / a["stature"]
+    assert got["elbow_r"][Z] == pytest.approx(elbow, abs=1e-9)
+    assert got["wrist_l"][Z] == pytest.approx(elbow - 0.30, abs=1e-9)
 
 
 @pytest.mark.parametrize("model", ["standing", "upper_body"])

@@ -21,7 +21,7 @@ then to the trunk, the arms and down the left leg, whose foot a task keeps on th
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from casadi_posture.body.anthropometry import SegmentGeometry, SegmentInertia, resized
 from casadi_posture.data import parameters
@@ -161,12 +161,41 @@ def _derived(name: str, value: float, derivation: str, *sources: Parameter) -> P
     )
 
 
-# The leg's joint centres standing: the ANSUR II landmark each lies at, its name, and the
-# offset of the centre below it.
+# The limbs' joint centres standing, arms hanging straight: the ANSUR II landmark each lies
+# at (its height above the floor as a sum of signed measurements), the landmark's name, and
+# the record of the centre's offset below it.
 _CENTRES = {
-    "knee": ("knee_height_mid_patella", "knee height, mid-patella", "knee_below_mid_patella"),
-    "hip": ("trochanterion_height", "trochanterion height", "hip_below_trochanterion"),
+    "knee": (
+        (("knee_height_mid_patella", 1.0),),
+        "knee height, mid-patella",
+        "knee_below_mid_patella",
+    ),
+    "hip": ((("trochanterion_height", 1.0),), "trochanterion height", "hip_below_trochanterion"),
+    "elbow": (
+        (("acromial_height", 1.0), ("acromion_radiale_length", -1.0)),
+        "radiale height (acromial height − acromion–radiale length)",
+        "elbow_below_radiale",
+    ),
+    "wrist": (
+        (
+            ("acromial_height", 1.0),
+            ("acromion_radiale_length", -1.0),
+            ("radiale_stylion_length", -1.0),
+        ),
+        "stylion height, arm hanging straight (acromial height − acromion–radiale length"
+        " − radiale–stylion length)",
+        "wrist_below_stylion",
+    ),
 }
+
+# The limb segments whose length is the distance between two centres: segment, upper centre,
+# lower centre, and which of them is placed first (the other follows from the length).
+_SPANS = (
+    ("shank", "knee", "ankle", "ankle"),
+    ("thigh", "hip", "knee", "knee"),
+    ("upper_arm", "shoulder", "elbow", "shoulder"),
+    ("forearm", "elbow", "wrist", "elbow"),
+)
 
 
 def _given_length(geometry: SegmentGeometry) -> bool:
@@ -179,14 +208,15 @@ def _given_length(geometry: SegmentGeometry) -> bool:
 def skeleton(
     body: BodySpec, segments: Mapping[str, SegmentGeometry], hip_height: float | None = None
 ) -> tuple[Skeleton, dict[str, SegmentGeometry], list[Parameter]]:
-    """The joint centres of ``body`` (sex, stature), its segments with the shank and thigh
-    as long as the distances between the leg's joint centres, and the records of their
-    derivation.
+    """The joint centres of ``body`` (sex, stature), its segments with the shank, thigh,
+    upper arm and forearm as long as the distances between the limbs' joint centres, and the
+    records of their derivation.
 
-    Standing, the ankle, knee and hip centres lie at ANSUR II landmarks scaled by stature
-    (``_CENTRES``) unless the problem file gives a leg segment's length; then the centres
-    above stand on it. ``hip_height`` [m] moves the hips (and all above) to that height above
-    the floor (a seated ``upper_body``)."""
+    Standing, arms hanging, the ankle, knee, hip, elbow and wrist centres lie at ANSUR II
+    landmarks scaled by stature (``_CENTRES``), the shoulder's below the acromion (Rab 2002),
+    unless the problem file gives a limb segment's length; then the leg's centres above and
+    the arm's below follow from it. ``hip_height`` [m] moves the hips (and all above) to that
+    height above the floor (a seated ``upper_body``)."""
     sex, stature = body.sex, body.stature_m
     records: list[Parameter] = []
     source = _source
@@ -204,54 +234,75 @@ def skeleton(
     reed = f"reed_1999.{sex}"
     pw = source(f"{reed}.pelvis_width").value * stature / source(f"{reed}.stature").value
     reed_source = source(f"{reed}.pelvis_width")
-    heights = {"ankle": ansur("lateral_malleolus_height")}
+    rab = source("rab_2002.gh_below_acromion")
+    biacromial = ansur("biacromial_breadth")
+    heights = {
+        "ankle": ansur("lateral_malleolus_height"),
+        "shoulder": ansur("acromial_height") - rab.value * biacromial,
+    }
     derived = {
         "ankle": _derived(
             "body.ankle_height",
             heights["ankle"],
             f"ANSUR II mean lateral malleolus height {per}",
             source(f"ansur_2.{sex}.lateral_malleolus_height"),
-        )
+        ),
+        "shoulder": _derived(
+            "body.shoulder_height",
+            heights["shoulder"],
+            f"ANSUR II mean acromial height − Rab 2002 {rab.value:g} × biacromial breadth, {per}",
+            source(f"ansur_2.{sex}.acromial_height"),
+            rab,
+        ),
     }
-    legs = dict(segments)
-    for name, top, bottom in (("shank", "knee", "ankle"), ("thigh", "hip", "knee")):
-        geometry = segments[name]
-        if _given_length(geometry):
-            heights[top] = heights[bottom] + geometry.length
-            derived[top] = _derived(
-                f"body.{top}_height",
-                heights[top],
-                f"{bottom} height + the given {name} length {geometry.length:g} m",
-                derived[bottom],
-            )
-            continue
-        landmark, label, offset = _CENTRES[top]
-        measured, below = source(f"ansur_2.{sex}.{landmark}"), source(f"landmark_centres.{offset}")
-        heights[top] = ansur(landmark) - below.value
-        derived[top] = _derived(
-            f"body.{top}_height",
-            heights[top],
-            f"ANSUR II mean {label} {measured.value:g} m {per},"
-            f" the {top} centre {below.value:g} m below it",
-            measured,
+
+    def centre(joint: str) -> None:
+        """``joint``'s centre at its ANSUR II landmark (``_CENTRES``)."""
+        terms, label, offset = _CENTRES[joint]
+        measured = [source(f"ansur_2.{sex}.{name}") for name, _ in terms]
+        below = source(f"landmark_centres.{offset}")
+        landmark = sum(sign * ansur(name) for name, sign in terms)
+        heights[joint] = landmark - below.value
+        means = ", ".join(f"{m.value:g} m" for m in measured)
+        derived[joint] = _derived(
+            f"body.{joint}_height",
+            heights[joint],
+            f"ANSUR II mean {label} ({means}) {per}, the {joint} centre {below.value:g} m below it",
+            *measured,
             below,
         )
-        length = heights[top] - heights[bottom]
-        legs[name] = resized(
+
+    limbs = dict(segments)
+    for name, upper, lower, first in _SPANS:
+        then = lower if first == upper else upper
+        geometry = segments[name]
+        if _given_length(geometry):
+            sign = -1.0 if then == lower else 1.0
+            heights[then] = heights[first] + sign * geometry.length
+            derived[then] = _derived(
+                f"body.{then}_height",
+                heights[then],
+                f"{first} height {'−' if sign < 0 else '+'} the given {name} length"
+                f" {geometry.length:g} m",
+                derived[first],
+            )
+            continue
+        centre(then)
+        limbs[name] = resized(
             geometry,
             Parameter(
                 f"segment.{name}.length",
-                length,
+                heights[upper] - heights[lower],
                 "m",
-                f"{top} centre height − {bottom} centre height standing"
-                f" (body.{top}_height − body.{bottom}_height)",
+                f"{upper} centre height − {lower} centre height standing"
+                f" (body.{upper}_height − body.{lower}_height)",
                 "estimate",
-                derived[top].evidence,
+                derived[then].evidence,
             ),
         )
-        records += legs[name].parameters
-    records += [derived["ankle"], derived["knee"]]
-    ankle, knee, standing_hip = heights["ankle"], heights["knee"], heights["hip"]
+        records += limbs[name].parameters
+    records += [derived[joint] for joint in ("ankle", "knee", "elbow", "wrist")]
+    standing_hip = heights["hip"]
     hip = standing_hip if hip_height is None else hip_height
     lift = hip - standing_hip
     if hip_height is None:
@@ -278,15 +329,8 @@ def skeleton(
         f"ANSUR II mean cervicale height {per}",
         source(f"ansur_2.{sex}.cervicale_height"),
     )
-    rab = source("rab_2002.gh_below_acromion")
-    biacromial = ansur("biacromial_breadth")
-    shoulder = record(
-        "shoulder_height",
-        ansur("acromial_height") - rab.value * biacromial + lift,
-        f"ANSUR II mean acromial height − Rab 2002 {rab.value:g} × biacromial breadth, {per}",
-        source(f"ansur_2.{sex}.acromial_height"),
-        rab,
-    )
+    shoulder = heights["shoulder"] + lift
+    records.append(replace(derived["shoulder"], value=round(shoulder, 6)))
     shoulder_half = record(
         "shoulder_half_width",
         biacromial / 2,
@@ -319,8 +363,8 @@ def skeleton(
     )
     return (
         Skeleton(
-            ankle_height=ankle,
-            knee_height=knee + lift,
+            ankle_height=heights["ankle"],
+            knee_height=heights["knee"] + lift,
             hip_height=hip,
             hip_half_width=hip_half,
             l5s1=(-back, 0.0, hip + up),
@@ -336,7 +380,7 @@ def skeleton(
             ball_half_width=foot_breadth / 2,
             toe_half_width=source(f"{estimate}.toe_width").value * foot_breadth / 2,
         ),
-        legs,
+        limbs,
         records,
     )
 
