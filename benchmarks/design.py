@@ -20,7 +20,7 @@ from casadi_posture.problem import load_problem
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 SHELF = {"tasks[2].target_m[2],tasks[3].target_m[2]": (1.0, 1.6)}
-DOT = {"tasks[2].point_m[2],tasks[3].target_m[2]": (0.9, 1.5)}
+DOT = {"tasks[3].point_m[2],tasks[4].target_m[2]": (0.9, 1.5)}
 CASES = [
     # (problem, free keys and bounds [m], levels kept (None: every level achieved at the
     # start), NLP starts)
