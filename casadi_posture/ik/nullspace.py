@@ -26,7 +26,9 @@ on some DOFs select rows of Z. Neither needs its Jacobian evaluated.
 
 Joint limits and the inequality aᵀq ≤ b: joints held at a limit are moved onto it and
 removed from Z_0; the inequality, while held, is the highest-priority equality
-aᵀΔq = b - aᵀq, undamped. See :meth:`NullspaceSolver._held_step` for when they are held.
+aᵀΔq = b - aᵀq, undamped. See :meth:`NullspaceSolver._held_step` for when they are held;
+in :meth:`NullspaceSolver.solve`, of what a step takes beyond, the clamping loop holds first
+what it reaches first (``FIRST_REACHED``).
 Near a solution the iterations are extrapolated (:class:`_Anderson`).
 
 The damping floor (:meth:`NullspaceSolver.solve` only; :meth:`NullspaceSolver.iteration`
@@ -107,9 +109,10 @@ class NullspaceOptions:
     Saddle: a run at rest that misses a level whose own gradient vanishes there (no higher
     level holds it off) is tested for negative curvature of that level and restarted from
     a posture that lowers it (``STATIONARY``); if no restart does better, the status is
-    ``stalled: level k at a saddle, residual r``, not ``converged``. So is a rest at which
-    that level pulls a held joint limit or the held inequality back inside
-    (``KKT_TOLERANCE``): ``stalled: level k held at a limit it pulls away from, ...``.
+    ``stalled: level k at a saddle, residual r``, not ``converged``. A rest at which that
+    level pulls a held joint limit or the held inequality back inside (``KKT_TOLERANCE``) is
+    restarted with that constraint released; if no restart does better, the status is
+    ``stalled: level k held at a limit it pulls away from, ...``.
     """
 
     damping: float | tuple[float, ...] = 1e-3
@@ -176,12 +179,18 @@ SADDLE_RESTARTS = 3
 #: the held inequality) back inside, so that it could go lower with the levels above kept.
 #: At rest with such a level, its gradient Jₖᵀeₖ is tested for the Karush-Kuhn-Tucker
 #: conditions with the levels above as equalities and the held limits and inequality as
-#: inequalities (nonnegative multipliers, :func:`_nnls`); a remainder above ``KKT_TOLERANCE``
-#: times ‖Jₖ‖‖eₖ‖ makes the status ``stalled``. Measured on the 28-DOF benchmark body under
-#: the paper's constraint on the right hip flexion (a step of the 20-minute simulation): the
-#: right hip abduction held at its upper limit with a multiplier of -0.0044 for the feet
-#: level, the ankles 0.348 m off their targets where 0.286 m is reachable (the lexicographic
-#: solver's answer); the numpy reference of benchmarks/scaling.py rests there too.
+#: inequalities (nonnegative multipliers, :func:`_nnls`). A remainder above ``KKT_TOLERANCE``
+#: times ‖Jₖ‖‖eₖ‖ is the active-set method's cue: the constraint with the most negative
+#: least-squares multiplier is released, and the run restarts from the rest posture with the
+#: others held for its first iteration (``SADDLE_RESTARTS`` in all with the saddles; the
+#: better rest is kept). If no restart does better, the status is ``stalled``. Measured on the
+#: 28-DOF benchmark body under the paper's constraint on the right hip flexion (a step of the
+#: 20-minute simulation; 28 of its 1201 steps fell back on the other solver): the right hip
+#: abduction held at its upper limit with a multiplier of -0.0044 for the feet level, the
+#: ankles 0.348 m off their targets where 0.286 m is reachable (the lexicographic solver's
+#: answer); the numpy reference of benchmarks/scaling.py rests there too. Released, it moves
+#: inside its range and the run converges to the lexicographic solver's answer (0.2861823 m,
+#: 116 iterations in all).
 KKT_TOLERANCE = 1e-4
 
 
@@ -346,6 +355,33 @@ class _Level:
 #: the tasks soon pull back.
 RETEST = 4
 
+#: In :meth:`NullspaceSolver.solve` (:meth:`NullspaceSolver.iteration` is the paper's loop)
+#: the clamping loop holds, of the free joints a step takes beyond a limit and the inequality
+#: if it violates it, those the step reaches first: a constraint at its bound already
+#: (within ``ACTIVE_TOLERANCE``) is reached at once, the others at the fraction of the step
+#: where they cross; those reached within ``FIRST_REACHED`` times the first are held, the
+#: step is swept again, and what it still takes beyond is held on the next pass (Baerlocher
+#: and Boulic's loop holds every violator of a pass at once; the SNS algorithm of Flacco, De
+#: Luca and Khatib saturates the first). A constraint that the others, once held, keep inside
+#: is then never held. Measured on the 28-DOF benchmark body (a step of its 20-minute
+#: simulation; 29 of its 1201 steps fell back on the other solver): the step, with the
+#: constraint on the right leg held, takes three joints at their limits beyond and the right
+#: hip rotation at 0.81 of its length; holding all four moved the hip rotation 0.52 rad onto
+#: its lower limit, to a rest with the ankles 0.2389 m off, worse than the 0.2224 m passed:
+#: ``stalled``. Holding the three first, the hip rotation stays inside, and the run converges
+#: to the lexicographic solver's answer (0.2222972 m, the same joints at their limits). The
+#: factor: steps far outside the linear range reach several constraints at nearly the same
+#: fraction, an order the linearisation cannot tell. Measured on the 2-DOF arm under the
+#: paper's -45° line (holding_m45.toml, at 215 s): a 2.4 rad step along the held constraint
+#: reaches the shoulder's lower limit at 0.354 of its length and the elbow's at 0.379;
+#: holding the shoulder alone left the arm at the corner of its limit and the constraint,
+#: the wrist 0.61 m off the line (the lexicographic solver: 0.019 m), called converged, and
+#: the arm exhausted at 284 s instead of 328 s. Any factor from 1.1 to 4 gives the same
+#: simulations of that arm and of the 28-DOF body (7 and 0 fallbacks); the first alone
+#: (factor 1) gives 12 on the arm, and holding everything past those at their bounds at once
+#: 28 on the 28-DOF body.
+FIRST_REACHED = 2.0
+
 #: The iteration is accelerated while its step shrinks by less than this factor per
 #: iteration (slow linear convergence; faster contraction is left alone) and is shorter
 #: than ``ACCELERATED_STEP`` [rad]. Longer steps are shaped by the task error clamping and
@@ -433,6 +469,7 @@ class NullspaceSolver:
         # κ_k per level while solve() runs; none on level 1, which no task constrains
         self._base_floor = [0.0] + [self.options.curvature] * (hierarchy.depth - 1)
         self._floor: list[float] | None = None
+        self._ordered = False  # whether the clamping loop holds first what it reaches first
 
     def _build(self) -> Callable[[], None]:
         """The levels, and the evaluation of every e_k then the column-major J_k of the
@@ -560,8 +597,9 @@ class NullspaceSolver:
     def _caught(
         self, q: np.ndarray, dq: np.ndarray, inequality: Inequality | None, held: _Held
     ) -> _Held | None:
-        """``held`` with the free joints the step Δq takes more than ``limit_slack`` beyond
-        a limit and the inequality if it violates it; None when it takes nothing new beyond."""
+        """``held`` with the free joints the step Δq [rad] takes more than ``limit_slack``
+        beyond a limit and the inequality if it violates it (while :meth:`solve` runs, those
+        it reaches first: :meth:`_first_reached`); None when it takes nothing new beyond."""
         after, free = q + dq, True if held.side is None else held.side == 0
         below = free & (after < self._lower_slack)
         above = free & (after > self._upper_slack)
@@ -573,17 +611,46 @@ class NullspaceSolver:
         joints = bool(below.any() or above.any())
         if not (violated or joints):
             return None
+        if self._ordered:
+            below, above, violated = self._first_reached(q, dq, inequality, below, above, violated)
+            joints = bool(below.any() or above.any())
         side = held.side
         if joints:
             side = np.zeros(q.size, dtype=int) if side is None else side.copy()
             side[below], side[above] = -1, 1
         return _Held(side, held.inequality or violated)
 
+    def _first_reached(
+        self,
+        q: np.ndarray,
+        dq: np.ndarray,
+        inequality: Inequality | None,
+        below: np.ndarray,
+        above: np.ndarray,
+        violated: bool,
+    ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Of the joints the step Δq [rad] takes ``below`` or ``above`` their limits and the
+        inequality if ``violated``, those it reaches within ``FIRST_REACHED`` times the
+        first."""
+        # the fraction of the step at which each is reached: 0 at its bound already
+        reach = np.full(q.size, np.inf)
+        reach[below] = (self._lower[below] - q[below]) / dq[below]
+        reach[above] = (self._upper[above] - q[above]) / dq[above]
+        reach[below & (q <= self._lower + ACTIVE_TOLERANCE)] = 0.0
+        reach[above & (q >= self._upper - ACTIVE_TOLERANCE)] = 0.0
+        ineq_reach = np.inf
+        if violated:
+            assert inequality is not None
+            gap = inequality.b - float(inequality.a @ q)
+            ineq_reach = 0.0 if gap <= ACTIVE_TOLERANCE else gap / float(inequality.a @ dq)
+        first = FIRST_REACHED * min(float(reach.min()), ineq_reach)
+        return below & (reach <= first), above & (reach <= first), violated and ineq_reach <= first
+
     def _clamped_step(
         self, q: np.ndarray, dx: np.ndarray, inequality: Inequality | None, held: _Held
     ) -> tuple[np.ndarray, _Held]:
-        """Sweep, hold what the step takes beyond its limit, sweep again: until the held
-        set stops growing (each pass holds one more joint or the inequality, so at most
+        """Sweep, hold what the step takes (first) beyond its limit, sweep again: until the
+        held set stops growing (each pass holds one more joint or the inequality, so at most
         n + 2 sweeps)."""
         while True:
             dq = self._sweep(q, dx, inequality, held)
@@ -612,10 +679,10 @@ class NullspaceSolver:
         below ``tolerance``): the loop's own first pass, the step with nothing held, says
         where the tasks pull. A held constraint stays held unless that step pulls it back
         inside its range (Δq_i > 0 at a lower limit, < 0 at an upper one, aᵀΔq < 0 for the
-        inequality); what that step takes beyond a limit is held too, and the loop goes on
-        from there. So a constraint is held against the pull of the tasks for at most
-        ``RETEST`` - 1 iterations, and a converged posture is a fixed point of the original
-        loop: at rest, the loop restarted from nothing holds the same set.
+        inequality); what that step takes (first) beyond a limit is held too, and the loop
+        goes on from there. So a constraint is held against the pull of the tasks for at most
+        ``RETEST`` - 1 iterations, and a converged posture is a fixed point of the loop: at
+        rest, the loop restarted from nothing holds the same set.
         """
         if held and not test:
             dq, now = self._clamped_step(q, dx, inequality, held)
@@ -672,11 +739,12 @@ class NullspaceSolver:
         limit = max_iterations or self.options.max_iterations
         q = np.clip(np.asarray(q0, dtype=float), body.lower, body.upper)
         self._floor = list(self._base_floor) if self.options.curvature > 0 else None
+        self._ordered = True
         try:
             q, status, iterations = self._iterations(q, inequality, limit)
             q, status, iterations = self._leave_saddles(q, status, iterations, inequality, limit)
         finally:
-            self._floor = None
+            self._floor, self._ordered = None, False
         residuals = self._point(q)[0][1:]
         at_limits, active = active_constraints(body, q, inequality)
         hard_ok = inequality is None or inequality.violation(q) <= 1e-9
@@ -693,17 +761,17 @@ class NullspaceSolver:
         )
 
     def _iterations(
-        self, q: np.ndarray, inequality: Inequality | None, limit: int
+        self, q: np.ndarray, inequality: Inequality | None, limit: int, held: _Held = _NOTHING
     ) -> tuple[np.ndarray, str, int]:
-        """The iterations of :meth:`solve` from ``q`` [rad]: the posture, status, count."""
-        held = _NOTHING
+        """The iterations of :meth:`solve` from ``q`` [rad] with ``held`` held for the first
+        (untested): the posture, status, count."""
         accelerate = _Anderson(self.options.acceleration_memory)
         status, iterations, best, since = "max_iterations", 0, None, 0
         best_q, shortest = q.copy(), np.inf
         last = None
         while iterations < limit:
             iterations += 1
-            test = since > 0 or iterations % RETEST == 1
+            test = since > 0 or (iterations % RETEST == 1 and not (iterations == 1 and held))
             merit, q_next, step, now = self._iterate(q, inequality, held, test)
             if not now.same(held):
                 back = accelerate.abandon()
@@ -749,10 +817,12 @@ class NullspaceSolver:
             found = self._saddle(q, inequality) or self._unbalanced(q, inequality)
             if found is None:
                 break
-            k, start, why = found
+            k, start, held, why = found
             if start is not None and restarts < SADDLE_RESTARTS and iterations < limit:
                 restarts += 1
-                q_next, status_next, spent = self._iterations(start, inequality, limit - iterations)
+                q_next, status_next, spent = self._iterations(
+                    start, inequality, limit - iterations, held
+                )
                 iterations += spent
                 merit, before = self._merit(q_next, inequality), self._merit(q, inequality)
                 if status_next == "converged" and _better(merit, before, REST_MARGIN):
@@ -770,15 +840,17 @@ class NullspaceSolver:
 
     def _unbalanced(
         self, q: np.ndarray, inequality: Inequality | None
-    ) -> tuple[int, None, str] | None:
+    ) -> tuple[int, np.ndarray, _Held, str] | None:
         """The first level k missed at ``q`` [rad] when a joint limit or the inequality held
         there keeps it from going lower, its gradient outside the KKT cone (see
-        ``KKT_TOLERANCE``); None otherwise."""
+        ``KKT_TOLERANCE``), with ``q`` and the constraints active there less the one whose
+        multiplier is most negative, to restart from; None otherwise."""
         lower = q <= self._lower + ACTIVE_TOLERANCE
         upper = q >= self._upper - ACTIVE_TOLERANCE
-        normals = [self._eye[:, i] for i in np.flatnonzero(upper)]
-        normals += [-self._eye[:, i] for i in np.flatnonzero(lower)]
-        if inequality is not None and inequality.a @ q >= inequality.b - ACTIVE_TOLERANCE:
+        joints = [*np.flatnonzero(upper), *np.flatnonzero(lower)]
+        normals = [self._eye[:, i] * (1.0 if upper[i] else -1.0) for i in joints]
+        active = inequality is not None and inequality.a @ q >= inequality.b - ACTIVE_TOLERANCE
+        if active:
             normals.append(inequality.a)
         norms = self._point(q)[0]
         missed = np.flatnonzero(norms[1:] > ACHIEVED_TOLERANCE)
@@ -796,14 +868,19 @@ class NullspaceSolver:
         scale = float(np.linalg.norm(jacobian) * norms[k + 1])
         if np.linalg.norm(remainder) <= KKT_TOLERANCE * scale:
             return None
-        return k, None, "held at a limit it pulls away from"
+        side = np.where(upper, 1, 0) - np.where(lower, 1, 0)
+        drop = int(np.argmin(np.linalg.lstsq(cone, -gradient, rcond=None)[0]))
+        if drop < len(joints):
+            side[joints[drop]] = 0
+        held = _Held(side if side.any() else None, active and drop < len(joints))
+        return k, q, held, "held at a limit it pulls away from"
 
     def _saddle(
         self, q: np.ndarray, inequality: Inequality | None
-    ) -> tuple[int, np.ndarray, str] | None:
+    ) -> tuple[int, np.ndarray, _Held, str] | None:
         """The first level missed at ``q`` [rad] and a posture that lowers its residual along
-        a direction of negative curvature, when ``q`` is a saddle of that level (see
-        ``STATIONARY``); None otherwise."""
+        a direction of negative curvature (to restart from with nothing held), when ``q`` is a
+        saddle of that level (see ``STATIONARY``); None otherwise."""
         norms = self._point(q)[0]
         missed = np.flatnonzero(norms[1:] > ACHIEVED_TOLERANCE)
         if missed.size == 0 or self._levels[missed[0]].jacobian is None:
@@ -837,7 +914,7 @@ class NullspaceSolver:
             for sign in (1.0, -1.0):
                 start = np.clip(q + sign * size * move, self._lower, self._upper)
                 if self._point(start)[0][k + 1] < norms[k + 1] * (1.0 - REST_MARGIN[0]):
-                    return k, start, "at a saddle"
+                    return k, start, _NOTHING, "at a saddle"
         return None
 
     def _jacobian(self, k: int) -> np.ndarray:
