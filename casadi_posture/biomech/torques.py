@@ -114,7 +114,7 @@ def torque_expressions(
     return tau_ext, tau_pas, -(tau_pas + tau_ext), st
 
 
-def _applied(
+def applied_forces(
     body: BodyModel, ats: Sequence[str], p: ca.SX
 ) -> tuple[list[tuple[ca.SX, ca.SX]], list[ca.SX], list[str | None]]:
     """Every applied force (point [m], force [N], world) — the segments' weights, then the
@@ -133,7 +133,7 @@ def _applied(
 
 def _external(body: BodyModel, loads: Sequence[Load], p: ca.SX) -> ca.SX:
     """τe = Σ Jᵀ(m g) + Σ Jᵀ f + Σ J_ωᵀ M, the floor's reaction included [N·m]."""
-    forces, moments, frames = _applied(body, [load.at for load in loads], p)
+    forces, moments, frames = applied_forces(body, [load.at for load in loads], p)
     tau = ca.SX.zeros(body.n)
     for point, force in forces:
         tau += body.jacobian(point).T @ force
@@ -152,6 +152,6 @@ def footing_function(body: BodyModel, ats: tuple[str, ...]) -> ca.Function | Non
     if carried_foot(body) is None:
         return None
     p = ca.SX.sym("loads", LOAD_PARAMETERS * len(ats))
-    forces, moments, _ = _applied(body, ats, p)
+    forces, moments, _ = applied_forces(body, ats, p)
     pressure, share = floor_pressure(body, forces, moments)
     return ca.Function("footing", [body.q, p], [pressure, share], ["q", "loads"], ["c", "s"])
