@@ -31,6 +31,12 @@ from casadi_posture.biomech.torques import Torques, footing_function
 from casadi_posture.body.loads import pack
 from casadi_posture.body.support import margin, support_polygon
 from casadi_posture.ergonomics.plausibility import Plausibility, PostureCheck
+from casadi_posture.ergonomics.posture_scores import (
+    Assumptions,
+    SideScores,
+    body_kind,
+    score_posture,
+)
 from casadi_posture.errors import ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.hierarchy import TaskHierarchy
@@ -151,7 +157,8 @@ class StaticAnswer:
     share of men and women able to exert its torques (``capable``, biomech/capability.py).
     ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can);
     ``plausibility`` reports how plausible the posture is for a person (its flags are
-    among ``flags``)."""
+    among ``flags``); ``scores`` its RULA and REBA per side (none for a body they do not
+    fit: :func:`posture_scores`)."""
 
     problem: Problem
     torques: Torques
@@ -161,6 +168,7 @@ class StaticAnswer:
     flags: tuple[str, ...]
     capable: Capability
     plausibility: PostureCheck | None = None
+    scores: tuple[SideScores, ...] = ()
 
     def __repr__(self) -> str:
         group = self.limiting
@@ -283,7 +291,8 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     capable = capability(population_strength(problem, torques.strength), torques.half_joint_torque)
     check = plausibility(problem).check(torques.q, "posture")
     flags = (*_over_strength(groups), *_off_balance(problem, torques.q), *check.flags)
-    return StaticAnswer(problem, torques, groups, None, (), flags, capable, check)
+    scores = posture_scores(problem, torques.q)
+    return StaticAnswer(problem, torques, groups, None, (), flags, capable, check, scores)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
@@ -326,6 +335,7 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
         (*flags, *answer.flags),
         answer.capable,
         answer.plausibility,
+        answer.scores,
     )
 
 
@@ -389,6 +399,17 @@ def plausibility(problem: Problem) -> Plausibility:
         except ProblemError:
             neutral = None
     return Plausibility(problem.body, tasks, problem.loads, neutral)
+
+
+def posture_scores(problem: Problem, q: Sequence[float]) -> tuple[SideScores, ...]:
+    """RULA and REBA per side of ``problem``'s body at ``q`` [rad] holding its loads, with
+    the file's ``[ergonomics]`` inputs; empty for a body the worksheets do not fit
+    (ergonomics/posture_scores.py)."""
+    if body_kind(problem.body) is None:
+        return ()
+    return tuple(
+        score_posture(problem.body, q, problem.loads, Assumptions.of(problem.spec.ergonomics))
+    )
 
 
 def population_strength(

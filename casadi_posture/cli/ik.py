@@ -20,6 +20,7 @@ from casadi_posture.cli.common import (
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.output.report import table
 from casadi_posture.output.results import write_table
+from casadi_posture.output.scores import lines, static_report
 from casadi_posture.runs.compare import rows
 
 
@@ -68,6 +69,7 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
                 "torques": {"dofs": answer.dofs(), "half_joints": answer.half_joints()},
                 "capable": answer.capable_report(),
                 "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
+                "rula_reba": static_report(answer.problem, answer.scores),
             }
         )
     else:
@@ -95,6 +97,8 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
         echo_free_dofs(answer.problem)
         click.echo()
         echo_torques(answer)
+        for line in lines(answer.problem, answer.scores):
+            click.echo(line)
         for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")
     if answer.flags:

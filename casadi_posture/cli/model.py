@@ -21,6 +21,7 @@ from casadi_posture.cli.common import (
 from casadi_posture.data.templates import TEMPLATES, template
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
+from casadi_posture.output.scores import lines, static_report
 
 
 def _templates_or_files(
@@ -218,11 +219,14 @@ def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_j
                 "half_joints": answer.half_joints(),
                 "capable": answer.capable_report(),
                 "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
+                "rula_reba": static_report(answer.problem, answer.scores),
             }
         )
     else:
         click.echo(f"{problem} ({resolved.body.name})\n")
         echo_torques(answer)
+        for line in lines(answer.problem, answer.scores):
+            click.echo(line)
         for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")
     if answer.flags:

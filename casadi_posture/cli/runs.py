@@ -27,6 +27,7 @@ from casadi_posture.output.animation import WRITERS, check_format
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
+from casadi_posture.output.scores import run_lines
 from casadi_posture.runs.whatif import MAX_CASES
 from casadi_posture.static import law
 
@@ -239,6 +240,8 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
         click.echo(
             f"  {held['dof']} rests on its {held['limit_deg']:g}° limit for {held['seconds']:g} s"
         )
+    for line in run_lines(report["rula_reba"]):
+        click.echo(line)
     for flag in report["flags"]:
         click.echo(f"FLAGGED: {flag}")
     click.echo("files: " + ", ".join(str(f) for f in files))
@@ -431,8 +434,9 @@ def whatif(
     solver were different? Runs the grid of the varied keys and reports per case whether
     level 1 was reached, the limiting muscle group at the start (the shortest endurance)
     and, simulated, the group actually exhausted, the fatigue/recovery cycles and how
-    long the task was held (≥: held to the end of the run): a table, whatif.csv and a
-    plot of each outcome against each varied key.
+    long the task was held (≥: held to the end of the run), and the worst RULA and REBA
+    (docs/rula_reba.md): a table, whatif.csv and a plot of each outcome against each
+    varied key.
 
     Every combination is validated before anything runs. Exit codes as for batch: 1
     when a case is flagged (not reached, over strength, solver failure) or failed.
@@ -486,6 +490,9 @@ def whatif(
         if any(row.get(key) is not None for row in report.rows)
     }
     headers += list(plausible.values())
+    scored = any(row.get("worst_rula") is not None for row in report.rows)
+    if scored:
+        headers += ["worst RULA (level)", "worst REBA (risk)"]
     headers.append("flags")
     order = {k: [str(v) for v in values] for k, values in parsed}
 
@@ -520,6 +527,8 @@ def whatif(
         if scheduled:
             line.append(_work_cycles(row))
         line += [row.get(key) for key in plausible]
+        if scored:
+            line += _scores(row)
         rows.append([*line, row["flags"] or "-"])
     right = {headers.index(h) for h in ("task held (s)",) if h in headers}
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
@@ -534,6 +543,17 @@ def _work_cycles(row: dict[str, Any]) -> str:
     if row.get("work_cycles") is None:
         return "-"
     return f"{row['work_cycles']} ({row['work_cycles_completed']})"
+
+
+def _scores(row: dict[str, Any]) -> list[str]:
+    """``5 (3)`` and ``4 (medium)``: the worst RULA with its action level, the worst REBA
+    with its risk level."""
+    if row.get("worst_rula") is None:
+        return ["-", "-"]
+    return [
+        f"{row['worst_rula']} ({row['worst_rula_action_level']})",
+        f"{row['worst_reba']} ({row['worst_reba_risk']})",
+    ]
 
 
 def _yes_no(value: Any) -> str:

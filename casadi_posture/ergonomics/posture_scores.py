@@ -43,6 +43,7 @@ from casadi_posture.data import parameters
 from casadi_posture.ergonomics import reba, rula
 from casadi_posture.ergonomics.reba import Coupling
 from casadi_posture.ergonomics.rula import value
+from casadi_posture.spec.schema import ErgonomicsSpec
 
 _G = 9.80665
 
@@ -52,7 +53,8 @@ class Assumptions:
     """What the body or the problem does not say, with the default used: the neck's
     flexion [deg] and twist (the head rides on the trunk), a raised shoulder, an arm
     supported, the grip's coupling, the legs supported and balanced, the posture held
-    statically (> 1 min), repeated or changing rapidly, a shock in the load."""
+    statically (> 1 min), repeated or changing rapidly, a shock in the load. ``given``
+    names the fields a problem file set: they are not listed as assumed."""
 
     neck_deg: float = 0.0
     neck_twisted: bool = False
@@ -64,6 +66,17 @@ class Assumptions:
     repeated: bool = False
     rapid_changes: bool = False
     shock: bool = False
+    given: frozenset[str] = frozenset()
+
+    @classmethod
+    def of(cls, spec: ErgonomicsSpec) -> Assumptions:
+        """A problem file's ``[ergonomics]`` keys, the documented defaults for the rest."""
+        given = spec.given()
+        return cls(**given, given=frozenset(given))
+
+    def assumed(self, labels: dict[str, tuple[str, ...]]) -> tuple[str, ...]:
+        """The ``labels`` whose fields were not all given."""
+        return tuple(label for label, keys in labels.items() if not set(keys) <= self.given)
 
 
 @dataclass(frozen=True)
@@ -117,18 +130,18 @@ def score_posture(
     ``l``; ``arm`` for a planar body). RULA's load is what that side's hand holds; REBA's is
     every load's total (the trunk carries them all); a force counts as its size / g [kg]."""
     q = np.asarray(q, dtype=float)
-    names = set(body.dof_names)
-    if body.name == "frontal_elbow" or names == {"elbow_flexion"}:
+    kind, assumed = body_kind(body), assumptions.assumed(_ASSUMED)
+    if kind == "frontal":
         sides = {"arm": _frontal(q)}
-        assumed = (*_PLANAR, "upper arm fixed at 90° abduction by the model")
-    elif names == {"shoulder_flexion", "elbow_flexion"}:
+        assumed = (*assumed, *_PLANAR, "upper arm fixed at 90° abduction by the model")
+    elif kind == "sagittal":
         sides = {"arm": _sagittal(body, q)}
-        assumed = _PLANAR
-    elif {"lumbar_flexion", "shoulder_flexion_r", "elbow_flexion_r"} <= names:
+        assumed = (*assumed, *_PLANAR)
+    elif kind == "human":
         sides = {s: _human(body, q, s) for s in ("r", "l")}
-        assumed = (*_ASSUMED, *(("legs (seated)",) if sides["r"].seated else ()))
+        assumed = (*assumed, *(("legs (seated)",) if sides["r"].seated else ()))
     else:
-        raise ValueError(f"body {body.name!r}: RULA/REBA need a 3-D human or a planar arm")
+        raise ValueError(f"body {body.name!r}: {NOT_SCORED}")
     total = sum(_kg(load) for load in loads)
     out = []
     for side, m in sides.items():
@@ -137,15 +150,36 @@ def score_posture(
     return out
 
 
-_ASSUMED = (
-    "neck",
-    "shoulder raised",
-    "arm supported",
-    "coupling",
-    "muscle use / activity",
-    "legs supported and balanced",
-)
-_PLANAR = (*_ASSUMED, "trunk upright", "wrist neutral", "wrist twist mid-range")
+#: Why a body gets no RULA/REBA.
+NOT_SCORED = "RULA/REBA need a 3-D human (standing, upper_body) or a planar arm"
+
+
+def body_kind(body: BodyModel) -> str | None:
+    """How ``body`` is scored: ``frontal`` or ``sagittal`` (a planar arm), ``human`` (a 3-D
+    human's DOFs and the arm landmarks the worksheets measure), None when it cannot be."""
+    names = set(body.dof_names)
+    if body.name == "frontal_elbow" or names == {"elbow_flexion"}:
+        return "frontal"
+    if names == {"shoulder_flexion", "elbow_flexion"}:
+        return "sagittal"
+    arms = {f"{point}_{side}" for point in ("shoulder", "elbow", "wrist") for side in "rl"}
+    dofs = {"lumbar_flexion", "shoulder_flexion_r", "elbow_flexion_r"}
+    if dofs <= names and arms <= set(body.landmarks):
+        return "human"
+    return None
+
+
+#: The assumed inputs, each with the ``Assumptions`` fields a problem file sets it by.
+_ASSUMED = {
+    "neck": ("neck_deg", "neck_twisted"),
+    "shoulder raised": ("shoulder_raised",),
+    "arm supported": ("arm_supported",),
+    "coupling": ("coupling",),
+    "muscle use / activity": ("static", "repeated", "rapid_changes"),
+    "shock": ("shock",),
+    "legs supported and balanced": ("legs_supported",),
+}
+_PLANAR = ("trunk upright", "wrist neutral", "wrist twist mid-range")
 
 
 def _kg(load: Load) -> float:
@@ -216,9 +250,9 @@ def _frontal(q: np.ndarray) -> _Measured:
 
 def _human(body: BodyModel, q: np.ndarray, side: str) -> _Measured:
     i, deg = body.index, {d: math.degrees(q[k]) for d, k in body.index.items()}
-    trunk, upper_arm, wrist_y, shoulder_y = np.asarray(
-        _geometry(body, side)(q), dtype=float
-    ).ravel()
+    trunk, upper_arm, wrist_y, shoulder_y = (
+        np.asarray(_geometry(body, side)(q), dtype=float).ravel().tolist()
+    )
     twist = float(parameters.value("plausibility", "trunk_twist"))
     neutral, abducted = value("neutral_tolerance"), value("arm_abducted")
     pronation = f"forearm_pronation_{side}"
@@ -237,7 +271,7 @@ def _human(body: BodyModel, q: np.ndarray, side: str) -> _Measured:
         across_or_out=wrist_y * outward < 0.0
         or (wrist_y - shoulder_y) * outward > value("out_to_side"),
         deviated=abs(deg[f"wrist_deviation_{side}"]) > neutral,
-        twist_at_end=min(q[i[pronation]] - lower, upper - q[i[pronation]]) <= near,
+        twist_at_end=bool(min(q[i[pronation]] - lower, upper - q[i[pronation]]) <= near),
         trunk_twisted=abs(deg["lumbar_rotation"]) > twist,
         trunk_side_bent=abs(deg["lumbar_bending"]) > twist,
         seated=not knees,

@@ -23,6 +23,8 @@ from casadi_posture.description import description
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.output.key_postures import recoveries
 from casadi_posture.output.plain import dumps
+from casadi_posture.output.scores import run_report, step_scores
+from casadi_posture.output.scores import timeline_columns as score_columns
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.static import endurance, plausibility, rule
 
@@ -38,7 +40,9 @@ def summary(result: SimulationResult) -> dict[str, Any]:
     when and why. ``limiting_group_at_start``: the shortest static endurance at the first
     posture. ``first_to_fatigue``: the first group at the fatigue threshold.
     ``exhausted_group``: the group whose exhaustion ended the run. ``flags``: why the answer
-    cannot be used as it is (empty when it can).
+    cannot be used as it is (empty when it can). ``rula_reba``: RULA and REBA at the start,
+    each recovery and the end, the worst over the run and the inputs assumed
+    (output/scores.py).
     """
     tl, problem = result.timeline, result.problem
     body, settings = problem.body, result.settings
@@ -122,6 +126,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "schedule": schedule_summary(result),
         "balance_margin_min_m": balance_margin_min(result),
         "plausibility": plausible,
+        "rula_reba": run_report(result, step_scores(result)),
         "flags": flags(result, plausible),
         "solver_statistics": {
             "steps": int(tl.time.size),
@@ -376,7 +381,7 @@ def git_commit() -> dict[str, Any] | None:
 def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     """The timeline as named columns in the files' units (degrees, N·m, %MVC, s); the
     header of timeline.csv and the columns of :func:`timeline_frame`. Empty cells
-    (None): no constraint owner, goal or case on that step."""
+    (None): no constraint owner, goal or case on that step, no RULA/REBA on a rest step."""
     tl, body = result.timeline, result.problem.body
     halves = [h.name for h in body.half_joints]
     columns: dict[str, list[Any]] = {"time_s": tl.time.tolist(), "phase": list(tl.phase)}
@@ -406,7 +411,7 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
         columns["com_x_m"] = ground[:, 0].tolist()
         columns["com_y_m"] = ground[:, 1].tolist()
         columns["balance_margin_m"] = margins.tolist()
-    return columns
+    return columns | score_columns(result, step_scores(result))
 
 
 def _numbers(values: np.ndarray) -> list[float | None]:

@@ -10,6 +10,8 @@ from typing import Any
 from casadi_posture.biomech.capability import SEXES, Capability
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.output.results import summary
+from casadi_posture.output.scores import row as score_row
+from casadi_posture.output.scores import worst
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, at_posture
 
@@ -18,7 +20,8 @@ def static_row(answer: StaticAnswer) -> dict[str, Any]:
     """Whether level 1 was reached, each half-joint's load [%MVC] and endurance [min], the
     groups over strength, the limiting group, the share of men and of women capable of the
     task [%], how plausible the posture is (joints near a limit, asymmetry and
-    out-of-plane angle [deg], None where the task is neither symmetric nor sagittal) and
+    out-of-plane angle [deg], None where the task is neither symmetric nor sagittal), the
+    worst RULA and REBA over the sides with their action levels (None: not scored) and
     the flags (one string)."""
     row: dict[str, Any] = {}
     if answer.levels:
@@ -35,6 +38,7 @@ def static_row(answer: StaticAnswer) -> dict[str, Any]:
             "joints_near_limit": len(check.near_limits) if check else None,
             "asymmetry_deg": check.asymmetry_deg if check else None,
             "out_of_plane_deg": check.out_of_plane_deg if check else None,
+            **score_row(worst((0.0, side) for side in answer.scores)),
             "flags": "; ".join(answer.flags),
         }
     )
@@ -45,7 +49,8 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     None when the run has no step) and what the simulation found: when the
     first group reached the fatigue threshold, which group was exhausted and when, the
     cycles, how long the task was held (a lower bound when the run ended with it held),
-    the first recovery posture [deg] and its effector position [m], and the flags."""
+    the first recovery posture [deg] and its effector position [m], the worst RULA and
+    REBA over the run and the sides with their action levels, and the flags."""
     report = summary(result)
     task, first, exhausted = report["task"], report["first_to_fatigue"], report["exhausted_group"]
     schedule = report["schedule"]
@@ -83,6 +88,7 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
             "ik_fallbacks": report["solver_statistics"]["ik_fallbacks"],
             "balance_margin_min_m": report["balance_margin_min_m"],
             **_plausible(report["plausibility"]),
+            **score_row(report["rula_reba"]["worst"]),
             "flags": "; ".join(report["flags"]),
         }
     )

@@ -494,6 +494,26 @@ class ScheduleSpec(Strict):
     t_off_s: Annotated[float, _between(0.0, MAX_DURATION_S)]
 
 
+class ErgonomicsSpec(Strict):
+    """What RULA and REBA need that the body and the tasks do not say (docs/rula_reba.md);
+    a key left out keeps its documented default and is named as assumed in the outputs."""
+
+    neck_deg: Annotated[float, _between(-90.0, 90.0)] | None = None
+    neck_twisted: bool | None = None
+    shoulder_raised: bool | None = None
+    arm_supported: bool | None = None
+    coupling: Literal["good", "fair", "poor", "unacceptable"] | None = None
+    legs_supported: bool | None = None
+    static: bool | None = None
+    repeated: bool | None = None
+    rapid_changes: bool | None = None
+    shock: bool | None = None
+
+    def given(self) -> dict[str, float | bool | str]:
+        """The keys the file set, with their values."""
+        return self.model_dump(exclude_none=True)
+
+
 class SolverSpec(Strict):
     """IK solver and its options; an option left out takes the solver's own default."""
 
@@ -522,3 +542,4 @@ class ProblemSpec(Strict):
     simulation: SimulationSpec = SimulationSpec()
     schedule: ScheduleSpec | None = None
     solver: SolverSpec = SolverSpec()
+    ergonomics: ErgonomicsSpec = ErgonomicsSpec()
