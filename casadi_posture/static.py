@@ -27,6 +27,8 @@ from casadi_posture.biomech.capability import (
     population,
 )
 from casadi_posture.biomech.comfort import neutral_posture
+from casadi_posture.biomech.low_back import LowBack, low_back_model
+from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.biomech.torques import Torques, footing_function
 from casadi_posture.body.loads import pack
 from casadi_posture.body.support import margin, support_polygon
@@ -158,7 +160,8 @@ class StaticAnswer:
     ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can);
     ``plausibility`` reports how plausible the posture is for a person (its flags are
     among ``flags``); ``scores`` its RULA and REBA per side (none for a body they do not
-    fit: :func:`posture_scores`)."""
+    fit: :func:`posture_scores`); ``low_back`` the compression and shear at L5/S1 (None
+    for a body without a lumbar joint: :func:`low_back`)."""
 
     problem: Problem
     torques: Torques
@@ -169,6 +172,7 @@ class StaticAnswer:
     capable: Capability
     plausibility: PostureCheck | None = None
     scores: tuple[SideScores, ...] = ()
+    low_back: LowBack | None = None
 
     def __repr__(self) -> str:
         group = self.limiting
@@ -290,9 +294,15 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     groups = tuple(group_loads(problem, torques))
     capable = capability(population_strength(problem, torques.strength), torques.half_joint_torque)
     check = plausibility(problem).check(torques.q, "posture")
-    flags = (*_over_strength(groups), *_off_balance(problem, torques.q), *check.flags)
+    back = low_back(problem, torques.q)
+    flags = (
+        *_over_strength(groups),
+        *compression_flags(None if back is None else back.compression),
+        *_off_balance(problem, torques.q),
+        *check.flags,
+    )
     scores = posture_scores(problem, torques.q)
-    return StaticAnswer(problem, torques, groups, None, (), flags, capable, check, scores)
+    return StaticAnswer(problem, torques, groups, None, (), flags, capable, check, scores, back)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
@@ -336,6 +346,7 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
         answer.capable,
         answer.plausibility,
         answer.scores,
+        answer.low_back,
     )
 
 
@@ -354,6 +365,23 @@ def _over_strength(groups: Sequence[GroupLoad]) -> list[str]:
         return []
     needs = ", ".join(f"{g.name} needs {g.load_pct_mvc:.2f} %MVC" for g in over)
     return [f"over strength: {needs}; this posture cannot be held"]
+
+
+def compression_flags(compression: float | None, detail: str = "") -> list[str]:
+    """A flag when the L5/S1 compression [N] is above the NIOSH design limit, naming the
+    limit it is above (the upper one above 6400 N); ``detail`` follows the number (a
+    run's times). None: not computed, no flag."""
+    limit = compression_limits()
+    if compression is None or compression <= limit["design"]:
+        return []
+    if compression > limit["upper"]:
+        above = f"the NIOSH upper limit of {limit['upper']:g} N: hazardous to nearly all workers"
+    else:
+        above = f"the NIOSH design limit of {limit['design']:g} N: the task should be redesigned"
+    return [
+        f"low-back compression {compression:.0f} N at L5/S1{detail} is above {above} "
+        "(Chaffin & Andersson's single equivalent muscle; docs/low_back.md)"
+    ]
 
 
 def _off_balance(problem: Problem, q: Sequence[float]) -> list[str]:
@@ -410,6 +438,14 @@ def posture_scores(problem: Problem, q: Sequence[float]) -> tuple[SideScores, ..
     return tuple(
         score_posture(problem.body, q, problem.loads, Assumptions.of(problem.spec.ergonomics))
     )
+
+
+def low_back(problem: Problem, q: Sequence[float]) -> LowBack | None:
+    """The compression and shear [N] at L5/S1 of ``problem``'s body at ``q`` [rad] holding
+    its loads (biomech/low_back.py); None for a body without a lumbar joint (not computed,
+    never zero)."""
+    model = low_back_model(problem.body, problem.loads)
+    return None if model is None else model.evaluate(q)
 
 
 def population_strength(

@@ -127,8 +127,7 @@ class LowBackModel:
     def __init__(self, body: BodyModel, loads: Sequence[Load]) -> None:
         self.body = body
         self.loads = tuple(loads)
-        self.extensor_arm = parameters.value("low_back", "extensor_moment_arm")
-        self.flexor_arm = parameters.value("low_back", "flexor_moment_arm")
+        self.extensor_arm, self.flexor_arm = moment_arms()
         p = ca.SX.sym("loads", LOAD_PARAMETERS * len(self.loads))
         out = low_back_expressions(body, self.loads, p, self.extensor_arm, self.flexor_arm)
         self.function = ca.Function(
@@ -151,6 +150,14 @@ def low_back_model(body: BodyModel, loads: Sequence[Load]) -> LowBackModel | Non
     """The low-back model of ``body`` with ``loads``, or ``None`` for a body without a
     lumbar joint (its compression is not computed, never zero)."""
     return LowBackModel(body, loads) if has_lumbar_joint(body) else None
+
+
+def moment_arms() -> tuple[float, float]:
+    """The erector spinae's and the rectus abdominis's moment arms about L5/S1 [m]."""
+    return (
+        parameters.value("low_back", "extensor_moment_arm"),
+        parameters.value("low_back", "flexor_moment_arm"),
+    )
 
 
 def limits() -> dict[str, float]:

@@ -18,6 +18,7 @@ from casadi_posture.cli.common import (
     problem_from,
 )
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.output import low_back
 from casadi_posture.output.report import table
 from casadi_posture.output.results import write_table
 from casadi_posture.output.scores import lines, static_report
@@ -70,6 +71,7 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
                 "capable": answer.capable_report(),
                 "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
                 "rula_reba": static_report(answer.problem, answer.scores),
+                "low_back": low_back.static_report(answer.low_back),
             }
         )
     else:
@@ -97,7 +99,7 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
         echo_free_dofs(answer.problem)
         click.echo()
         echo_torques(answer)
-        for line in lines(answer.problem, answer.scores):
+        for line in [*lines(answer.problem, answer.scores), *low_back.lines(answer.low_back)]:
             click.echo(line)
         for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")

@@ -20,6 +20,7 @@ from casadi_posture.cli.common import (
 )
 from casadi_posture.data.templates import TEMPLATES, template
 from casadi_posture.errors import MISSING, ProblemError
+from casadi_posture.output import low_back
 from casadi_posture.output.report import table
 from casadi_posture.output.scores import lines, static_report
 
@@ -220,12 +221,13 @@ def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_j
                 "capable": answer.capable_report(),
                 "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
                 "rula_reba": static_report(answer.problem, answer.scores),
+                "low_back": low_back.static_report(answer.low_back),
             }
         )
     else:
         click.echo(f"{problem} ({resolved.body.name})\n")
         echo_torques(answer)
-        for line in lines(answer.problem, answer.scores):
+        for line in [*lines(answer.problem, answer.scores), *low_back.lines(answer.low_back)]:
             click.echo(line)
         for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")

@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from casadi_posture import api
+from casadi_posture.biomech.low_back import MODEL
 from casadi_posture.cli.common import (
     FORCE_OPTION,
     SET_OPTION,
@@ -146,10 +147,41 @@ def _echo(result: Sensitivity, problem: str, top: int, kinds: tuple[str, ...]) -
             f"\nelasticity: % change of the task's endurance per % change of the input; "
             f"{len(ranked) - len(rows)} more inputs ranked in --json / --out"
         )
+    _echo_compression(result, top, kinds)
     for key, why in result.left_out.items():
         click.echo(f"note: {key} is not an input: {why}")
     for flag in result.flags:
         click.echo(f"FLAGGED: {flag}")
+
+
+def _echo_compression(result: Sensitivity, top: int, kinds: tuple[str, ...]) -> None:
+    """The inputs ranked by the L5/S1 compression's elasticity (a body with a lumbar joint)."""
+    ranked = result.ranked_compression(kinds)
+    if result.compression is None or not ranked:
+        return
+    click.echo(f"\nlow-back compression at L5/S1 {result.compression:.0f} N, by the {MODEL}\n")
+    click.echo(
+        table(
+            ["input", "value", "unit", "d compression (N per unit)", "elasticity"],
+            [
+                [
+                    r["key"],
+                    r["value"],
+                    r["unit"],
+                    r["d_compression_N_per_unit"],
+                    "n/a (input 0)"
+                    if r["compression_elasticity"] is None
+                    else r["compression_elasticity"],
+                ]
+                for r in ranked[:top]
+            ],
+            digits=4,
+        )
+    )
+    click.echo(
+        "\nelasticity: % change of the compression per % change of the input; "
+        f"{len(ranked) - min(top, len(ranked))} more inputs ranked in --json / --out"
+    )
 
 
 def _write(result: Sensitivity, out: Path, top: int, kinds: tuple[str, ...]) -> list[Path]:

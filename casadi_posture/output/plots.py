@@ -16,6 +16,8 @@ from casadi_posture.ergonomics.posture_scores import body_kind
 from casadi_posture.ik.tasks import Line, Plane, Position
 from casadi_posture.output.figures3d import plot_postures_3d
 from casadi_posture.output.key_postures import key_postures, recoveries, title
+from casadi_posture.output.low_back import step_low_back
+from casadi_posture.output.low_back_plots import plot_low_back
 from casadi_posture.output.saving import save_figure
 from casadi_posture.output.schedule_plots import plot_schedule
 from casadi_posture.output.score_plots import plot_scores
@@ -365,7 +367,8 @@ def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
     """All figures of a simulation into ``out`` (none for a run stopped before its first
     step): postures.png in the plane of motion for a planar body, in four views for a 3-D
     one; fatigue_regions.png for a body of more than one region; schedule.png for a run
-    with a work–rest schedule; scores.png (RULA and REBA) for a body they fit."""
+    with a work–rest schedule; scores.png (RULA and REBA) for a body they fit;
+    low_back.png (compression and shear at L5/S1) for a body with a lumbar joint."""
     if result.timeline.time.size == 0:
         return []
     body = result.problem.body
@@ -382,4 +385,7 @@ def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
         figures.append(plot_schedule(result, out / "schedule.png"))
     if body_kind(body) is not None:
         figures.append(plot_scores(result, out / "scores.png"))
+    back = step_low_back(result)
+    if back is not None:
+        figures.append(plot_low_back(result, back, out / "low_back.png"))
     return figures

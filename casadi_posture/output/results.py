@@ -22,6 +22,9 @@ from casadi_posture import __version__
 from casadi_posture.description import description
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.output.key_postures import recoveries
+from casadi_posture.output.low_back import run_flags, step_low_back
+from casadi_posture.output.low_back import run_report as low_back_report
+from casadi_posture.output.low_back import timeline_columns as low_back_columns
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.scores import run_report, step_scores
 from casadi_posture.output.scores import timeline_columns as score_columns
@@ -42,11 +45,13 @@ def summary(result: SimulationResult) -> dict[str, Any]:
     ``exhausted_group``: the group whose exhaustion ended the run. ``flags``: why the answer
     cannot be used as it is (empty when it can). ``rula_reba``: RULA and REBA at the start,
     each recovery and the end, the worst over the run and the inputs assumed
-    (output/scores.py).
+    (output/scores.py). ``low_back``: the peak compression and shear at L5/S1 and the time
+    above each NIOSH limit (output/low_back.py).
     """
     tl, problem = result.timeline, result.problem
     body, settings = problem.body, result.settings
     plausible = plausibility_report(result)
+    back = low_back_report(result, step_low_back(result))
     ran = tl.time.size > 0
     simulated = float(tl.time[-1]) if ran else 0.0
     groups = []
@@ -127,7 +132,8 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "balance_margin_min_m": balance_margin_min(result),
         "plausibility": plausible,
         "rula_reba": run_report(result, step_scores(result)),
-        "flags": flags(result, plausible),
+        "low_back": back,
+        "flags": flags(result, plausible, back),
         "solver_statistics": {
             "steps": int(tl.time.size),
             "steps_by_solver": dict(Counter(s for s in tl.solver if s)),
@@ -196,9 +202,9 @@ def _task(result: SimulationResult) -> dict[str, Any]:
     }
 
 
-def flags(result: SimulationResult, plausible: dict[str, Any]) -> list[str]:
+def flags(result: SimulationResult, plausible: dict[str, Any], back: dict[str, Any]) -> list[str]:
     """Why the run's answer cannot be used as it is, one line each (empty: it can);
-    ``plausible`` is the run's :func:`plausibility_report`."""
+    ``plausible`` is the run's :func:`plausibility_report`, ``back`` its ``low_back``."""
     tl, out = result.timeline, []
     if result.stop == "interrupted":
         out.append(f"interrupted at {tl.time[-1] if tl.time.size else 0.0:g} s: a partial run")
@@ -213,6 +219,7 @@ def flags(result: SimulationResult, plausible: dict[str, Any]) -> list[str]:
     if start_over:
         names = ", ".join(start_over)
         out.append(f"over strength at the start ({names}): the posture cannot be held at all")
+    out += run_flags(back)
     if result.ik_failures:
         out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
     out += plausible["flags"]
@@ -381,7 +388,8 @@ def git_commit() -> dict[str, Any] | None:
 def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     """The timeline as named columns in the files' units (degrees, N·m, %MVC, s); the
     header of timeline.csv and the columns of :func:`timeline_frame`. Empty cells
-    (None): no constraint owner, goal or case on that step, no RULA/REBA on a rest step."""
+    (None): no constraint owner, goal or case on that step, no RULA/REBA, compression or
+    shear on a rest step."""
     tl, body = result.timeline, result.problem.body
     halves = [h.name for h in body.half_joints]
     columns: dict[str, list[Any]] = {"time_s": tl.time.tolist(), "phase": list(tl.phase)}
@@ -411,7 +419,8 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
         columns["com_x_m"] = ground[:, 0].tolist()
         columns["com_y_m"] = ground[:, 1].tolist()
         columns["balance_margin_m"] = margins.tolist()
-    return columns | score_columns(result, step_scores(result))
+    back = low_back_columns(step_low_back(result))
+    return columns | back | score_columns(result, step_scores(result))
 
 
 def _numbers(values: np.ndarray) -> list[float | None]:

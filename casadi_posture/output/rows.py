@@ -9,6 +9,8 @@ from typing import Any
 
 from casadi_posture.biomech.capability import SEXES, Capability
 from casadi_posture.body.tree import BodyModel
+from casadi_posture.output.low_back import run_row
+from casadi_posture.output.low_back import static_row as back_row
 from casadi_posture.output.results import summary
 from casadi_posture.output.scores import row as score_row
 from casadi_posture.output.scores import worst
@@ -21,8 +23,8 @@ def static_row(answer: StaticAnswer) -> dict[str, Any]:
     groups over strength, the limiting group, the share of men and of women capable of the
     task [%], how plausible the posture is (joints near a limit, asymmetry and
     out-of-plane angle [deg], None where the task is neither symmetric nor sagittal), the
-    worst RULA and REBA over the sides with their action levels (None: not scored) and
-    the flags (one string)."""
+    worst RULA and REBA over the sides with their action levels (None: not scored), the
+    L5/S1 compression [N] (None: not computed) and the flags (one string)."""
     row: dict[str, Any] = {}
     if answer.levels:
         top = answer.levels[0]
@@ -39,6 +41,7 @@ def static_row(answer: StaticAnswer) -> dict[str, Any]:
             "asymmetry_deg": check.asymmetry_deg if check else None,
             "out_of_plane_deg": check.out_of_plane_deg if check else None,
             **score_row(worst((0.0, side) for side in answer.scores)),
+            **back_row(answer.low_back),
             "flags": "; ".join(answer.flags),
         }
     )
@@ -50,7 +53,8 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
     first group reached the fatigue threshold, which group was exhausted and when, the
     cycles, how long the task was held (a lower bound when the run ended with it held),
     the first recovery posture [deg] and its effector position [m], the worst RULA and
-    REBA over the run and the sides with their action levels, and the flags."""
+    REBA over the run and the sides with their action levels, the peak L5/S1 compression
+    [N] and the time above the NIOSH design limit [s], and the flags."""
     report = summary(result)
     task, first, exhausted = report["task"], report["first_to_fatigue"], report["exhausted_group"]
     schedule = report["schedule"]
@@ -89,6 +93,7 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
             "balance_margin_min_m": report["balance_margin_min_m"],
             **_plausible(report["plausibility"]),
             **score_row(report["rula_reba"]["worst"]),
+            **run_row(report["low_back"]),
             "flags": "; ".join(report["flags"]),
         }
     )

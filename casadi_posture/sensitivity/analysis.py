@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casadi_posture.biomech.low_back import MODEL
 from casadi_posture.problem import Problem
 from casadi_posture.sensitivity.parametric import Input, ParametricProblem
 from casadi_posture.sensitivity.posture import PostureDerivative, posture_derivative
@@ -39,7 +40,8 @@ class Sensitivity:
     strength: their rows are zero and not reported); ``task_endurance_s`` the limiting
     group's (None: no group tires, or the answer is flagged) and ``d_task``. ``posture``
     holds dq/dθ (None: the tasks leave the posture free; then the derivatives hold the
-    posture fixed and ``flags`` say so)."""
+    posture fixed and ``flags`` say so). ``compression`` is the compression [N] at L5/S1 and
+    ``d_compression`` its derivative [N per input unit] (None: no lumbar joint)."""
 
     answer: StaticAnswer
     inputs: tuple[Input, ...]
@@ -56,6 +58,8 @@ class Sensitivity:
     posture: PostureDerivative
     flags: tuple[str, ...]
     wall_time_s: float
+    compression: float | None = None
+    d_compression: np.ndarray | None = None
 
     def elasticity(self, derivative: np.ndarray, outcome: float) -> list[float | None]:
         """``derivative·x/outcome`` per input (None where the input or the outcome is 0)."""
@@ -94,6 +98,32 @@ class Sensitivity:
             key=lambda r: (
                 r["endurance_elasticity"] is None,
                 -abs(r["endurance_elasticity"] or r["d_endurance_min_per_unit"]),
+            ),
+        )
+
+    def ranked_compression(self, kinds: Sequence[str] = ()) -> list[dict[str, object]]:
+        """Every input (of ``kinds``, default all) with the L5/S1 compression's derivative [N
+        per unit] and elasticity, ranked as :meth:`ranked` (none without a lumbar joint)."""
+        if self.compression is None or self.d_compression is None:
+            return []
+        elasticity = self.elasticity(self.d_compression, self.compression)
+        rows = [
+            {
+                "key": item.key,
+                "kind": item.kind,
+                "value": item.value,
+                "unit": item.unit,
+                "d_compression_N_per_unit": float(self.d_compression[j]),
+                "compression_elasticity": elasticity[j],
+            }
+            for j, item in enumerate(self.inputs)
+            if not kinds or item.kind in kinds
+        ]
+        return sorted(
+            rows,
+            key=lambda r: (
+                r["compression_elasticity"] is None,
+                -abs(r["compression_elasticity"] or r["d_compression_N_per_unit"]),
             ),
         )
 
@@ -143,6 +173,14 @@ class Sensitivity:
                 "ranked": self.ranked(),
             },
             "groups": groups,
+            "low_back": {
+                "model": MODEL,
+                "compression_N": self.compression,
+                "ranked": self.ranked_compression(),
+                "note": None
+                if self.compression is not None
+                else "not computed (the body has no lumbar joint)",
+            },
             "flags": list(self.flags),
             "wall_time_s": self.wall_time_s,
         }
@@ -178,7 +216,8 @@ def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
         )
         limited[:] = False
         endurance = [ca.SX(0)] * loads.numel()
-    outcomes = ca.vertcat(loads, *endurance)
+    back = [] if graph.compression is None else [graph.compression]
+    outcomes = ca.vertcat(loads, *endurance, *back)
     function = ca.Function(
         "outcomes",
         [graph.q, graph.theta],
@@ -191,6 +230,8 @@ def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
     )
     value, by_q, by_theta, tau = (np.asarray(v) for v in function(q, graph.values))
     _check_consistency(problem, q, tau.ravel())
+    compression = float(value[-1, 0]) if back else None
+    _check_compression(answer, compression)
     total = by_theta + by_q @ dq
     m = loads.numel()
     groups = tuple(h.name for h in problem.body.half_joints)
@@ -224,14 +265,16 @@ def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
         value[:m, 0],
         total[:m],
         limited,
-        np.where(limited, value[m:, 0], 0.0),
-        np.where(limited[:, None], total[m:], 0.0),
+        np.where(limited, value[m : 2 * m, 0], 0.0),
+        np.where(limited[:, None], total[m : 2 * m], 0.0),
         limiting,
         task,
         d_task,
         posture,
         tuple(flags),
         time.perf_counter() - start,
+        compression,
+        total[-1] if back else None,
     )
 
 
@@ -242,6 +285,17 @@ def _check_consistency(problem: Problem, q: np.ndarray, tau: np.ndarray) -> None
     if error > CONSISTENCY * max(1.0, float(np.max(np.abs(own), initial=0.0))):
         raise RuntimeError(
             f"the sensitivity graph's torques differ from the problem's by {error:g} N·m"
+        )
+
+
+def _check_compression(answer: StaticAnswer, compression: float | None) -> None:
+    """The graph's L5/S1 compression equals the answer's (a wrong graph fails loud)."""
+    own = None if answer.low_back is None else answer.low_back.compression
+    if (own is None) != (compression is None) or (
+        own is not None and abs(own - compression) > CONSISTENCY * max(1.0, abs(own))
+    ):
+        raise RuntimeError(
+            f"the sensitivity graph's compression {compression} N differs from {own} N"
         )
 
 

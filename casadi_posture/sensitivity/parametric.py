@@ -28,6 +28,7 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 
+from casadi_posture.biomech.low_back import has_lumbar_joint, low_back_expressions, moment_arms
 from casadi_posture.biomech.passive import ExponentialPassive, PassiveTorque, ReshapedPassive
 from casadi_posture.biomech.strength import ConstantStrength, Strength
 from casadi_posture.biomech.torques import torque_expressions
@@ -90,8 +91,9 @@ class ParametricProblem:
     ``levels`` (one residual per priority level of ``hierarchy``), ``tau_act`` [N·m] per DOF,
     ``strength`` [N·m], ``load`` [%MVC] and ``endurance`` [s] per half-joint (each group's
     law at its load, meaningful where the group is limited; None: the law has no
-    expression). With ``symbolic=False`` there are no inputs: the same graph with the
-    problem's numbers (``theta`` is empty)."""
+    expression), ``compression`` [N] at L5/S1 (None: the body has no lumbar joint). With
+    ``symbolic=False`` there are no inputs: the same graph with the problem's numbers
+    (``theta`` is empty)."""
 
     def __init__(
         self, problem: Problem, hierarchy: TaskHierarchy | None, *, symbolic: bool = True
@@ -119,6 +121,11 @@ class ParametricProblem:
             self.body, problem.loads, loads, passive, strengths
         )
         self._load_masses = [loads[LOAD_PARAMETERS * k] for k in range(len(problem.loads))]
+        self.compression = (
+            low_back_expressions(self.body, problem.loads, loads, *moment_arms())[0]
+            if has_lumbar_joint(self.body)
+            else None
+        )
         self.levels = [] if hierarchy is None else self._levels(hierarchy)
         self.load = self._load_pct_mvc()
         self.endurance = [self._endurance(k, self.load[k]) for k in range(self.load.numel())]
