@@ -44,14 +44,10 @@ from casadi_posture.problem import (
     text_sha256,
 )
 from casadi_posture.runs import compare as comparison
+from casadi_posture.runs.axes import axis_keys, axis_label
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
-from casadi_posture.runs.whatif import (
-    MAX_CASES,
-    WHATIF_OUTPUTS,
-    describe_grid,
-    grid,
-    plot_outcomes,
-)
+from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
+from casadi_posture.runs.whatif_plots import plot_outcomes
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.simulation import simulate as run_simulation
 from casadi_posture.static import StaticAnswer, at_posture
@@ -217,9 +213,11 @@ def whatif(
 ) -> BatchReport:
     """A what-if study: the problem with each combination of the ``vary`` values (a full
     grid; with ``paired``, the i-th values of every key together), static (torques at the
-    start) or simulated, run into ``out``; ``overrides`` apply to every case first.
-    ``report.to_frame()`` is the table (also ``whatif.csv``); ``report.figures`` plot each
-    outcome against each varied key.
+    start) or simulated, run into ``out``; ``overrides`` apply to every case first. A key
+    ``"KEY1,KEY2"`` ties keys of one unit to one value per case (both hands' heights) and
+    counts as one axis. ``report.to_frame()`` is the table (also ``whatif.csv``);
+    ``report.figures`` draw each answer against the first axis, one line per value of the
+    others.
 
     ``problem`` is a file, or a :class:`Problem` loaded from one (its overrides are kept):
     every case is rebuilt from the file where it runs. With ``jobs`` > 1 a script must
@@ -227,7 +225,7 @@ def whatif(
     path, given = _problem_file(problem, overrides)
     if not vary:
         raise ProblemError(path, "vary", MISSING, "at least one key to vary")
-    varies = [(key, list(values)) for key, values in vary.items()]
+    varies = [(",".join(axis_keys(axis, path)), list(values)) for axis, values in vary.items()]
     cases = grid(
         path,
         varies,
@@ -247,7 +245,9 @@ def whatif(
     shutil.copyfile(report.summary, out / "whatif.csv")
     if not figures:
         return report
-    drawn = plot_outcomes(report.rows, varies, out, simulate=not static)
+    data = load_problem(path, given).data
+    labels = {axis: axis_label(data, axis) for axis, _ in varies}
+    drawn = plot_outcomes(report.rows, varies, labels, out, simulate=not static, paired=paired)
     return replace(report, figures=tuple(drawn))
 
 

@@ -668,8 +668,8 @@ def _problem_error(path: Path, error: ValidationError, raw: dict[str, Any]) -> P
     return ProblemError(path, key, value, message + more)
 
 
-#: Units named by the suffix of a key, for range messages.
-_UNITS = {
+#: Units named by the suffix of a key, for range messages and axis labels.
+KEY_UNITS = {
     "_m": " m (metres: a position in cm or mm is a unit slip)",
     "_deg": " deg",
     "_kg": " kg",
@@ -684,7 +684,7 @@ _UNITS = {
 def _unit_of(key: str) -> str:
     """The unit a key's name carries (``tasks[0].point_m[1]`` -> metres), or ''."""
     name = key.rsplit(".", 1)[-1].split("[", 1)[0]
-    return next((unit for suffix, unit in _UNITS.items() if name.endswith(suffix)), "")
+    return next((unit for suffix, unit in KEY_UNITS.items() if name.endswith(suffix)), "")
 
 
 def _key(loc: list[Any], raw: dict[str, Any]) -> str:

@@ -24,6 +24,7 @@ from casadi_posture.cli.common import (
 )
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.animation import WRITERS, check_format
+from casadi_posture.output.low_back import run_lines as low_back_lines
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
@@ -242,6 +243,8 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
         )
     for line in run_lines(report["rula_reba"]):
         click.echo(line)
+    for line in low_back_lines(report["low_back"]):
+        click.echo(line)
     for flag in report["flags"]:
         click.echo(f"FLAGGED: {flag}")
     click.echo("files: " + ", ".join(str(f) for f in files))
@@ -388,7 +391,8 @@ def _finish(report: Any) -> None:
     metavar="KEY=V1,V2,...",
     help="A problem key and its values (repeatable): 'loads[0].mass_kg=2.5,5' (quoted: "
     "shells read [0] as a pattern), "
-    "fatigue.strategy=active,passive, body.sex=male,female, solver=...",
+    "fatigue.strategy=active,passive, body.sex=male,female, solver=...; "
+    "'KEY1,KEY2=V1,...' ties keys to one value (both halves of a load).",
 )
 @click.option(
     "--out",
@@ -434,9 +438,11 @@ def whatif(
     solver were different? Runs the grid of the varied keys and reports per case whether
     level 1 was reached, the limiting muscle group at the start (the shortest endurance)
     and, simulated, the group actually exhausted, the fatigue/recovery cycles and how
-    long the task was held (≥: held to the end of the run), and the worst RULA and REBA
-    (docs/rula_reba.md): a table, whatif.csv and a plot of each outcome against each
-    varied key.
+    long the task was held (≥: held to the end of the run), the worst RULA and REBA
+    (docs/rula_reba.md) and the (peak) low-back compression (docs/low_back.md): a table,
+    whatif.csv and a figure of each answer against the first varied key, one line per
+    value of the others. KEY1,KEY2=V1,... ties keys of one unit to one value (both hands'
+    heights, both halves of a load): one axis.
 
     Every combination is validated before anything runs. Exit codes as for batch: 1
     when a case is flagged (not reached, over strength, solver failure) or failed.
@@ -448,11 +454,14 @@ def whatif(
           --vary fatigue.strategy=active,passive --jobs 2
       casadi-posture whatif problems/holding_m45.toml --static --paired \\
           --vary body.sex=female,male --vary body.stature_m=1.52,1.87
+      casadi-posture whatif problems/standing_shelf_box.toml --static \\
+          --vary 'tasks[2].target_m[2],tasks[3].target_m[2]=1.0,1.2,1.4'
     """
+    from casadi_posture.runs.axes import axis_value
     from casadi_posture.runs.whatif import parse_vary
 
     parsed = [parse_vary(text, problem, unique=not paired) for text in varies]
-    keys = [key for key, _ in parsed]
+    keys = [key for axis, _ in parsed for key in axis.split(",")]
     if len(set(keys)) != len(keys):
         raise ProblemError(problem, "--vary", keys, "each key varied once")
     out = out or Path("out", "whatif", Path(problem).stem)
@@ -471,7 +480,7 @@ def whatif(
         overrides=parse_sets(sets, problem),
         quiet=quiet,
     )
-    keys = [k for k, _ in parsed]
+    keys = [axis for axis, _ in parsed]
     headers = [*keys, "reached", "limiting group at start", "region", "endurance at start (min)"]
     headers += ["capable men (%)", "capable women (%)"]
     scheduled = not static and any(row.get("work_cycles") is not None for row in report.rows)
@@ -493,18 +502,21 @@ def whatif(
     scored = any(row.get("worst_rula") is not None for row in report.rows)
     if scored:
         headers += ["worst RULA (level)", "worst REBA (risk)"]
+    backs = any(row.get("peak_compression_N") is not None for row in report.rows)
+    if backs:
+        headers.append(f"{'' if static else 'peak '}L5/S1 compression (N)")
     headers.append("flags")
     order = {k: [str(v) for v in values] for k, values in parsed}
 
     def position(row: dict[str, Any]) -> list[int]:
-        given = [str(row.get("solver") if k == "solver" else row.get(k)) for k in keys]
+        given = [str(axis_value(row, k)) for k in keys]
         return [
             order[k].index(v) if v in order[k] else -1 for k, v in zip(keys, given, strict=True)
         ]
 
     rows = []
     for row in sorted(report.rows, key=position):
-        line = [row.get("solver") if k == "solver" else row.get(k) for k in keys]
+        line = [axis_value(row, k) for k in keys]
         if row["status"] in ("failed", "skipped"):
             reason = f"{row['status']}: {row['error']}"
             rows.append(line + [None] * (len(headers) - len(line) - 1) + [reason])
@@ -529,6 +541,9 @@ def whatif(
         line += [row.get(key) for key in plausible]
         if scored:
             line += _scores(row)
+        if backs:
+            back = row.get("peak_compression_N")
+            line.append(None if back is None else round(back))
         rows.append([*line, row["flags"] or "-"])
     right = {headers.index(h) for h in ("task held (s)",) if h in headers}
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
