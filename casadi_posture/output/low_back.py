@@ -5,13 +5,13 @@ of a batch or what-if case."""
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from casadi_posture.biomech.low_back import MODEL, OUTPUTS, LowBack, limits, low_back_model
+from casadi_posture.output.per_run import once_per_run
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.static import compression_flags
 
@@ -93,17 +93,11 @@ class StepLoads:
     shear: np.ndarray
 
 
-#: The last run evaluated, by weak reference, and its values.
-_last: tuple[weakref.ref[SimulationResult], StepLoads | None] | None = None
-
-
+@once_per_run
 def step_low_back(result: SimulationResult) -> StepLoads | None:
     """The compression and shear at every step of a run holding its loads, from one batched
     call of the compiled model over the stacked postures; None for a body without a lumbar
-    joint. The last run's values are kept for its timeline, summary, figure and row."""
-    global _last
-    if _last is not None and _last[0]() is result:
-        return _last[1]
+    joint."""
     tl, problem = result.timeline, result.problem
     model = low_back_model(problem.body, problem.loads)
     steps = None
@@ -116,7 +110,6 @@ def step_low_back(result: SimulationResult) -> StepLoads | None:
                 values[row] = np.asarray(out[OUTPUTS.index(name)], dtype=float).ravel()
             values[:, [phase == "rest" for phase in tl.phase]] = np.nan
         steps = StepLoads(values[0], values[1])
-    _last = (weakref.ref(result), steps)
     return steps
 
 

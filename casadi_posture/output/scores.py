@@ -4,7 +4,6 @@ worst scores of a batch or what-if row."""
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -12,6 +11,7 @@ import numpy as np
 
 from casadi_posture.ergonomics.posture_scores import NOT_SCORED, SideScores
 from casadi_posture.output.key_postures import recoveries
+from casadi_posture.output.per_run import once_per_run
 from casadi_posture.problem import Problem
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.static import posture_scores
@@ -65,17 +65,10 @@ def _toml(value: Any) -> str:
     return str(value).lower() if isinstance(value, bool) else repr(value)
 
 
-#: The last run scored, by weak reference, and its scores.
-_last: tuple[weakref.ref[SimulationResult], list[Scores | None]] | None = None
-
-
+@once_per_run
 def step_scores(result: SimulationResult) -> list[Scores | None]:
     """RULA and REBA per side at every step of a run holding its loads (None on a rest step:
-    the relaxed posture is not modelled). A posture met before is not scored again, and the
-    last run's scores are kept for its timeline, summary and figure."""
-    global _last
-    if _last is not None and _last[0]() is result:
-        return _last[1]
+    the relaxed posture is not modelled). A posture met before is not scored again."""
     tl, problem = result.timeline, result.problem
     seen: dict[bytes, Scores] = {}
     out: list[Scores | None] = []
@@ -87,7 +80,6 @@ def step_scores(result: SimulationResult) -> list[Scores | None]:
         if key not in seen:
             seen[key] = posture_scores(problem, q)
         out.append(seen[key])
-    _last = (weakref.ref(result), out)
     return out
 
 

@@ -93,13 +93,7 @@ class Sensitivity:
             for j, item in enumerate(self.inputs)
             if not kinds or item.kind in kinds
         ]
-        return sorted(
-            rows,
-            key=lambda r: (
-                r["endurance_elasticity"] is None,
-                -abs(r["endurance_elasticity"] or r["d_endurance_min_per_unit"]),
-            ),
-        )
+        return _by_elasticity(rows, "endurance_elasticity", "d_endurance_min_per_unit")
 
     def ranked_compression(self, kinds: Sequence[str] = ()) -> list[dict[str, object]]:
         """Every input (of ``kinds``, default all) with the L5/S1 compression's derivative [N
@@ -119,13 +113,7 @@ class Sensitivity:
             for j, item in enumerate(self.inputs)
             if not kinds or item.kind in kinds
         ]
-        return sorted(
-            rows,
-            key=lambda r: (
-                r["compression_elasticity"] is None,
-                -abs(r["compression_elasticity"] or r["d_compression_N_per_unit"]),
-            ),
-        )
+        return _by_elasticity(rows, "compression_elasticity", "d_compression_N_per_unit")
 
     def to_dict(self) -> dict[str, object]:
         """Everything, for JSON: inputs, outcomes, every derivative and elasticity."""
@@ -303,3 +291,14 @@ def _by_key(inputs: tuple[Input, ...], values: object) -> dict[str, float | None
     return {
         item.key: None if v is None else float(v) for item, v in zip(inputs, values, strict=True)
     }
+
+
+def _by_elasticity(
+    rows: list[dict[str, object]], elasticity: str, derivative: str
+) -> list[dict[str, object]]:
+    """``rows`` by the size of their ``elasticity``, largest first; rows without one (an
+    input at 0) last, by the size of their ``derivative`` per unit."""
+    return sorted(
+        rows,
+        key=lambda r: (r[elasticity] is None, -abs(r[elasticity] or r[derivative])),
+    )
