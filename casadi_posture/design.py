@@ -1,6 +1,7 @@
 """Workplace design by gradients: the task's target coordinates (a shelf's height, a line's
-position) chosen within bounds to maximise the task's static endurance, or the share of a
-population capable of it, by one NLP over the posture and the design together (docs/design.md).
+position) chosen within bounds to maximise the task's static endurance or the share of a
+population capable of it, or to minimise the low-back compression, by one NLP over the
+posture and the design together (docs/design.md).
 
 Variables: the posture q [rad] within the joint limits, the design d [m] within its bounds
 and the epigraph variable t. Constraints: every priority level the IK achieves at the start
@@ -13,7 +14,13 @@ task, are dropped: the person takes whichever posture is best). Objective, maxim
   T_0, a group at or below it never binds ("unlimited below T_0"); and ``L_g ≤ 100 %MVC``;
 - ``capable-male`` / ``capable-female``: ``(μ_g − max(τ_g, 0))/s_g ≥ t`` with μ_g, s_g the
   population strength's mean and SD [N·m] of that sex (biomech/capability.py): Φ is
-  monotone, so the largest smallest z-score is the largest share capable.
+  monotone, so the largest smallest z-score is the largest share capable;
+- ``compression``: ``−C_m(q) ≥ t`` [N] for each muscle m of the L5/S1 compression
+  C = −F·e_z + max(M_s/E, −M_s/A) of biomech/low_back.py (its CasADi expressions):
+  C_e = −F·e_z + M_s/E (erector spinae), C_a = −F·e_z − M_s/A (rectus abdominis), so that
+  the largest t is −C without the kink of the max at M_s = 0; the lumbar bending and
+  rotation are held at the start's (the model leaves out the moments they would hide the
+  load in).
 
 The NLP starts from the IK's posture at the start design, which is feasible, and is built
 once per problem structure (the targets, loads and bounds are its parameters). The answer
@@ -37,6 +44,15 @@ import numpy as np
 from casadi_posture import static
 from casadi_posture.biomech.capability import SEXES, Sex, capability
 from casadi_posture.biomech.endurance import numeric
+from casadi_posture.biomech.low_back import (
+    LUMBAR,
+    MODEL,
+    OUTPUTS,
+    has_lumbar_joint,
+    low_back_expressions,
+    moment_arms,
+)
+from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.body.loads import pack
 from casadi_posture.errors import MISSING, CasadiPostureError, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
@@ -45,13 +61,19 @@ from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.spec.overrides import parse_key
 from casadi_posture.spec.schema import ComTask, GazeTask, LineTask, PlaneTask, PositionTask
 
-OBJECTIVES = ("endurance", "capable-male", "capable-female")
+OBJECTIVES = ("endurance", "capable-male", "capable-female", "compression")
+
+#: The JSON key of a compression score [N].
+COMPRESSION_UNIT = "compression_N"
+
+#: The low-back outputs the compression objective's measures are made of.
+_COMPRESSION_TERMS = ("compression", "sagittal_moment", "muscle_force")
 
 #: A design value within this of a bound [m] is reported at that bound.
 BOUND_TOLERANCE_M = 1e-6
 
-#: The re-solved IK agrees with the NLP when its endurance is within this fraction of the
-#: NLP's [-], or its share capable within this many percentage points [%].
+#: The re-solved IK agrees with the NLP when its endurance or compression is within this
+#: fraction of the NLP's [-], or its share capable within this many percentage points [%].
 CHECK_RELATIVE = 0.01
 CHECK_SHARE_PCT = 0.5
 
@@ -220,7 +242,7 @@ def _target_index(problem: Problem, hierarchy: TaskHierarchy, key: str) -> int:
 class Score:
     """The objective at one design and posture: the static endurance [min] (``inf``:
     unlimited) or the share capable [%], with its limiting group, the group's region and
-    load [%MVC]."""
+    load [%MVC]; or the L5/S1 compression [N] (no group: None)."""
 
     value: float
     group: str | None
@@ -228,6 +250,13 @@ class Score:
     load_pct_mvc: float | None
 
     def to_dict(self, unit: str) -> dict[str, Any]:
+        if unit == COMPRESSION_UNIT:
+            limit = compression_limits()
+            return {
+                unit: self.value,
+                "above_niosh_design_limit": self.value > limit["design"],
+                "above_niosh_upper_limit": self.value > limit["upper"],
+            }
         return {
             unit: self.value,
             "limiting_group": self.group,
@@ -238,8 +267,12 @@ class Score:
 
 def score(answer: static.StaticAnswer, objective: str) -> Score:
     """The objective of a static answer: the limiting group's endurance [min] (``inf`` when
-    no group tires) or the task's share capable [%] for the objective's sex."""
+    no group tires), the task's share capable [%] for the objective's sex, or the L5/S1
+    compression [N] (``LowBackModel.evaluate`` at the answer's posture)."""
     problem, body = answer.problem, answer.problem.body
+    if objective == "compression":
+        assert answer.low_back is not None, "design() refuses a body without a lumbar joint"
+        return Score(answer.low_back.compression, None, None, None)
     if objective == "endurance":
         group = answer.limiting
         if group is None:
@@ -344,7 +377,10 @@ def design_nlp(
             "sb": "yes",
             "max_iter": MAX_ITERATIONS,
             "tol": 1e-8,
-            "hessian_approximation": "limited-memory",
+            # limited-memory for a row per group (on the standing shelf the exact Hessian was
+            # slower and stopped lower), exact for the compression's two rows (the
+            # limited-memory one ran out of iterations at fixed shelf heights)
+            "hessian_approximation": "exact" if objective == "compression" else "limited-memory",
         }
         options = {"print_time": False, "error_on_fail": False, "ipopt": ipopt}
         nlps[key] = ca.nlpsol("design", "ipopt", nlp, options)
@@ -374,10 +410,18 @@ def independent_rows(jacobian: np.ndarray, tolerance: float = 1e-9) -> list[int]
 
 
 def _measures(problem: Problem, torques: Any, objective: str) -> tuple[ca.SX, ca.SX]:
-    """Per half-joint the epigraph's measure (log-endurance [log s] or z-score [-]) and the
-    extra inequalities ``L_g − 100 ≤ 0`` [%MVC] (endurance only), both in ``body.q`` and
-    the load vector."""
+    """The epigraph's measures — per half-joint the log-endurance [log s] or z-score [-],
+    or per back muscle −compression [N] — and the extra inequalities ``L_g − 100 ≤ 0`` [%MVC]
+    (endurance only), all in ``body.q`` and the load vector ``torques.p``."""
     body = problem.body
+    if objective == "compression":
+        extensor, flexor = moment_arms()
+        back = low_back_expressions(body, problem.loads, torques.p, extensor, flexor)
+        compression, moment, muscle = (back[OUTPUTS.index(k)] for k in _COMPRESSION_TERMS)
+        axial = compression - muscle  # −F·e_z [N], smooth
+        # muscle = max(M, 0)/E + max(−M, 0)/A = max(M/E, −M/A): a row per muscle, smooth
+        rows = ca.vertcat(axial + moment / extensor, axial - moment / flexor)
+        return -rows, ca.SX(0, 1)
     active = [torques.tau_act[h.dof_index] * h.sign for h in body.half_joints]
     strength = [torques.strength[k] for k in range(len(body.half_joints))]
     if objective == "endurance":
@@ -440,9 +484,10 @@ class Design:
 
     ``free`` the design variables; ``best_m`` their values at the optimum [m]; ``start``,
     ``best`` and ``check`` the objective at the start (IK), at the NLP's answer and by the
-    IK re-solved at the best design; ``kept``/``dropped`` the priority levels kept as
-    equalities or dropped; ``status``/``success``/``iterations``/``wall_time_s`` IPOPT's;
-    ``notes`` say what to know, ``flags`` why the answer cannot be used as it is.
+    IK re-solved at the best design (a compression by ``LowBackModel.evaluate``);
+    ``kept``/``dropped`` the priority levels kept as equalities or dropped;
+    ``status``/``success``/``iterations``/``wall_time_s`` IPOPT's; ``notes`` say what to
+    know, ``flags`` why the answer cannot be used as it is.
     """
 
     problem: Problem
@@ -469,24 +514,33 @@ class Design:
 
     @property
     def unit(self) -> str:
-        return "endurance_min" if self.objective == "endurance" else "capable_pct"
+        """The JSON key of the objective's value, with its unit."""
+        units = {"endurance": "endurance_min", "compression": COMPRESSION_UNIT}
+        return units.get(self.objective, "capable_pct")
+
+    @property
+    def gain_unit(self) -> str:
+        """The unit of :attr:`gain`."""
+        units = {"endurance": "min", "compression": "N"}
+        return units.get(self.objective, "percentage points")
 
     @property
     def gain(self) -> float:
         """The answer: the IK re-solved at the best design − start [min or percentage
-        points] (``inf``: the re-solve is unlimited). What a person at the design would do,
-        as far as the IK predicts it; :attr:`nlp_gain` is the NLP's own."""
-        return _gain(self.start, self.check)
+        points] (``inf``: the re-solve is unlimited), or start − re-solved for the
+        compression [N] (its reduction). What a person at the design would do, as far as the
+        IK predicts it; :attr:`nlp_gain` is the NLP's own."""
+        return _gain(self.start, self.check, self.objective)
 
     @property
     def nlp_gain(self) -> float:
-        """The NLP's posture at the best design − start [min or percentage points]."""
-        return _gain(self.start, self.best)
+        """The gain of the NLP's posture at the best design over the start (as :attr:`gain`)."""
+        return _gain(self.start, self.best, self.objective)
 
     @property
     def ratio(self) -> float | None:
-        """re-solved / start [-] (``inf``: from a finite to an unlimited endurance; None
-        from a start of 0, where no ratio exists)."""
+        """re-solved / start [-] (``inf``: from a finite to an unlimited endurance; below 1:
+        a compression reduced; None from a start of 0, where no ratio exists)."""
         if math.isinf(self.check.value) and math.isinf(self.start.value):
             return 1.0
         return self.check.value / self.start.value if self.start.value > 0 else None
@@ -528,7 +582,10 @@ class Design:
             "best": self.best.to_dict(unit),
             "gain": {
                 "absolute": self.gain,
-                "unit": "min" if self.objective == "endurance" else "percentage points",
+                "unit": self.gain_unit,
+                "direction": "reduction: start − re-solved"
+                if self.objective == "compression"
+                else "increase: re-solved − start",
                 "ratio": self.ratio,
                 "of": "the IK re-solved at the best design",
                 "nlp_absolute": self.nlp_gain,
@@ -547,16 +604,23 @@ class Design:
                 **self.check.to_dict(unit),
                 "agrees": self.agrees,
                 "tolerance": (
-                    f"{100 * CHECK_RELATIVE:g} % of the NLP's endurance"
-                    if self.objective == "endurance"
-                    else f"{CHECK_SHARE_PCT:g} percentage points"
+                    f"{CHECK_SHARE_PCT:g} percentage points"
+                    if self.objective.startswith("capable-")
+                    else f"{100 * CHECK_RELATIVE:g} % of the NLP's {self.objective}"
                 ),
                 "posture_gap_deg": self.posture_gap_deg,
                 "solver": self.check_answer.ik.solver if self.check_answer.ik else None,
             },
+            **self._low_back(),
             "notes": list(self.notes),
             "flags": list(self.flags),
         }
+
+    def _low_back(self) -> dict[str, Any]:
+        """The compression objective's model and NIOSH limits [N] (nothing for the others)."""
+        if self.objective != "compression":
+            return {}
+        return {"low_back": {"model": MODEL, "niosh_limits_N": compression_limits()}}
 
 
 @dataclass(frozen=True)
@@ -604,7 +668,8 @@ def design(
     starts: int = 1,
 ) -> Design:
     """Choose the ``free`` quantities ({KEY or KEY1,KEY2: (LO, HI)} [m]) to maximise
-    ``objective`` (one of :data:`OBJECTIVES`) by the design NLP, and check the answer by
+    ``objective`` (one of :data:`OBJECTIVES`; the compression is minimised, with the lumbar
+    bending and rotation held at the start's) by the design NLP, and check the answer by
     re-solving the IK with the file's solver at the best design. The levels the IK achieves
     at the start are kept as equalities, only the first ``keep_levels`` of them if given
     (a posture task the start happens to achieve would otherwise fix the posture).
@@ -621,6 +686,12 @@ def design(
     quantities = tuple(free_quantities(problem, hierarchy, free))
     if objective == "endurance":
         _threshold(problem)
+    if objective == "compression" and not has_lumbar_joint(problem.body):
+        expected = (
+            f"a body with a lumbar joint (a {LUMBAR[0]} DOF) for the L5/S1 compression; "
+            f"body {problem.body.name!r} has none: use endurance or capable-male/female"
+        )
+        raise ProblemError(problem.path, "--objective", objective, expected)
     answer = static.solve(problem)
     if not answer.reached:
         raise CasadiPostureError(
@@ -678,8 +749,20 @@ def design(
             "reported"
         )
     body = problem.body
-    lbx = np.concatenate([body.lower, lower, [-np.inf]])
-    ubx = np.concatenate([body.upper, upper, [np.inf]])
+    joints_lower, joints_upper = body.lower, body.upper
+    if objective == "compression":
+        held = [body.index[name] for name in LUMBAR[1:] if name in body.index]
+        joints_lower[held] = joints_upper[held] = q0[held]
+        shown = ", ".join(
+            f"{body.dof_names[i]} {round(math.degrees(q0[i]), 1) + 0.0:g}°" for i in held
+        )
+        notes.append(
+            f"trunk held as at the start ({shown}): the sagittal model leaves out the lateral "
+            "and twisting moments, and the NLP would bend and twist the trunk to hide the "
+            "load from it"
+        )
+    lbx = np.concatenate([joints_lower, lower, [-np.inf]])
+    ubx = np.concatenate([joints_upper, upper, [np.inf]])
     lbg, ubg = nlp.constraint_bounds()
     best: tuple[float, _Run, np.ndarray] | None = None
     for q_i, d_i in points:
@@ -735,7 +818,7 @@ def _finish(
             f"(> {ACHIEVED_TOLERANCE:g}): the design does not keep the task"
         )
     if _better(start.score, best, objective) and run.success:
-        flags.append("the NLP ended below the start's objective (a local method left it)")
+        flags.append("the NLP ended worse than the start's objective (a local method left it)")
     check_answer = static.solve(at_best)
     check = score(check_answer, objective)
     gap = float(np.degrees(np.max(np.abs(check_answer.torques.q - q))))
@@ -744,12 +827,13 @@ def _finish(
     if lost:
         flags.append(f"the re-solved IK does not achieve kept level(s) {lost} at the design")
     if not agrees:
+        gain = "reduction" if objective == "compression" else "gain"
         flags.append(
             f"the re-solved IK ({check_answer.ik.solver if check_answer.ik else '-'}) gives "
             f"{_show(check.value, objective)} where the NLP gives {_show(best.value, objective)}: "
             f"it settles the posture its own way (largest joint difference {gap:.1f} deg), "
             "with the dropped levels pulling it, while the NLP takes the posture best for the "
-            "objective among those that keep the task; the gain is the re-solve's, and the "
+            f"objective among those that keep the task; the {gain} is the re-solve's, and the "
             "NLP's posture is not what the IK predicts a person does at the design"
         )
     if objective == "endurance" and best.load_pct_mvc is not None and math.isfinite(best.value):
@@ -785,17 +869,23 @@ def _finish(
     )
 
 
-def _gain(start: Score, end: Score) -> float:
-    """end − start [min or percentage points]; 0 between two unlimited endurances."""
+def _gain(start: Score, end: Score, objective: str) -> float:
+    """end − start [min or percentage points], start − end for the compression [N]; 0
+    between two unlimited endurances."""
     if math.isinf(end.value) and math.isinf(start.value):
         return 0.0
+    if objective == "compression":
+        return start.value - end.value
     return end.value - start.value
 
 
 def _better(a: Score, b: Score, objective: str) -> bool:
-    """Whether score ``a`` is better than ``b`` beyond the check tolerance."""
+    """Whether score ``a`` is better than ``b`` beyond the check tolerance (a lower
+    compression is better)."""
     if objective == "endurance":
         return a.value > b.value * (1.0 + CHECK_RELATIVE)
+    if objective == "compression":
+        return a.value < b.value * (1.0 - CHECK_RELATIVE)
     return a.value > b.value + CHECK_SHARE_PCT
 
 
@@ -803,12 +893,14 @@ def _agree(a: Score, b: Score, objective: str) -> bool:
     """Whether two scores agree within the check tolerance (two unlimited ones do)."""
     if math.isinf(a.value) or math.isinf(b.value):
         return a.value == b.value
-    if objective == "endurance":
-        return abs(a.value - b.value) <= CHECK_RELATIVE * max(abs(a.value), 1e-12)
-    return abs(a.value - b.value) <= CHECK_SHARE_PCT
+    if objective.startswith("capable-"):
+        return abs(a.value - b.value) <= CHECK_SHARE_PCT
+    return abs(a.value - b.value) <= CHECK_RELATIVE * max(abs(a.value), 1e-12)
 
 
 def _show(value: float, objective: str) -> str:
+    if objective == "compression":
+        return f"{value:.0f} N"
     if objective != "endurance":
         return f"{value:.2f} % capable"
     return "unlimited" if math.isinf(value) else f"{value:.3f} min"

@@ -1,4 +1,5 @@
-"""The design command: task targets chosen by one NLP to maximise endurance or % capable."""
+"""The design command: task targets chosen by one NLP to maximise endurance or % capable,
+or to minimise the L5/S1 compression."""
 
 from __future__ import annotations
 
@@ -9,9 +10,15 @@ import click
 import numpy as np
 
 from casadi_posture import api
+from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.cli.common import FORCE_OPTION, SET_OPTION, emit_json, main, problem_from
-from casadi_posture.design import OBJECTIVES, Design, design, parse_free, sweep
-from casadi_posture.output.design_plots import SWEEP_POINTS, plot_loads, plot_sweep
+from casadi_posture.design import OBJECTIVES, Design, Score, design, parse_free, sweep
+from casadi_posture.output.design_plots import (
+    SWEEP_POINTS,
+    plot_compression,
+    plot_loads,
+    plot_sweep,
+)
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import fmt, table
 
@@ -32,7 +39,9 @@ from casadi_posture.output.report import fmt, table
     type=click.Choice(OBJECTIVES),
     default="endurance",
     show_default=True,
-    help="Maximise the task's static endurance or the share of men or women capable.",
+    help="Maximise the task's static endurance or the share of men or women capable, or "
+    "minimise the L5/S1 compression [N] (a body with a lumbar joint; the trunk's bending and "
+    "twist held as at the start).",
 )
 @click.option(
     "--keep-levels",
@@ -70,8 +79,9 @@ def design_command(
     force: bool,
 ) -> None:
     """Choose task target coordinates (a shelf's height, a line's position) within bounds
-    to maximise the task's static endurance or its share of people capable, by one NLP
-    over the posture and the design (IPOPT), the task kept and joint limits respected.
+    to maximise the task's static endurance or its share of people capable, or to minimise
+    its low-back (L5/S1) compression, by one NLP over the posture and the design (IPOPT),
+    the task kept and joint limits respected.
     The answer is checked by re-solving the IK with the file's solver at the design.
 
     Every level the IK achieves at the start is kept as an equality; the others are
@@ -82,6 +92,8 @@ def design_command(
     \b
     Example:
       casadi-posture design problems/standing_shelf_box.toml \\
+          --free 'tasks[2].target_m[2],tasks[3].target_m[2]=1.0:1.6'
+      casadi-posture design problems/standing_shelf_box.toml --objective compression \\
           --free 'tasks[2].target_m[2],tasks[3].target_m[2]=1.0:1.6'
       casadi-posture design problems/holding_horizontal.toml \\
           --free 'tasks[0].point_m[2],tasks[1].target_m[2]=-0.5:0.1' --out out/design
@@ -103,7 +115,8 @@ def design_command(
 
 
 def _write(answer: Design, out: Path) -> list[Path]:
-    """design.json and the figure: the one-key sweep, or the group loads."""
+    """design.json and the figure: the one-key sweep, or the group loads (the compression
+    for that objective)."""
     out.mkdir(parents=True, exist_ok=True)
     data = out / "design.json"
     figure = out / "design.png"
@@ -119,19 +132,44 @@ def _write(answer: Design, out: Path) -> list[Path]:
             ]
         }
     else:
-        plot_loads(answer, figure)
+        (plot_compression if answer.objective == "compression" else plot_loads)(answer, figure)
         record = answer.to_dict()
     data.write_text(dumps(record) + "\n", encoding="utf-8")
     return [data, figure]
 
 
-def _signed(gain: float) -> str:
+def _signed(gain: float, digits: int) -> str:
     """A gain with its sign, or 'unlimited'."""
-    return "unlimited" if math.isinf(gain) else f"{gain:+.3f}"
+    return "unlimited" if math.isinf(gain) else f"{gain:+.{digits}f}"
+
+
+def _niosh(compression: float) -> str:
+    """Where a compression [N] lies against the NIOSH limits."""
+    limit = compression_limits()
+    if compression > limit["upper"]:
+        return f"ABOVE the upper limit {limit['upper']:g} N"
+    if compression > limit["design"]:
+        return f"ABOVE the design limit {limit['design']:g} N"
+    return f"below the design limit {limit['design']:g} N"
+
+
+def _scores(answer: Design, rows: list[tuple[str, Score]]) -> str:
+    """The objective's table: per row its value and limiting group, or its compression."""
+    if answer.objective == "compression":
+        return table(
+            ["", "L5/S1 compression (N)", "NIOSH"],
+            [[name, s.value, _niosh(s.value)] for name, s in rows],
+            digits=1,
+        )
+    unit = "endurance (min)" if answer.objective == "endurance" else "capable (%)"
+    return table(
+        ["", unit, "limiting group", "region", "load (%MVC)"],
+        [[name, s.value, s.group, s.region, s.load_pct_mvc] for name, s in rows],
+        digits=3,
+    )
 
 
 def _echo(answer: Design) -> None:
-    unit = "endurance (min)" if answer.objective == "endurance" else "capable (%)"
     click.echo(
         f"{answer.problem.path}: design for {answer.objective}; IPOPT {answer.status}, "
         f"{answer.iterations} iterations, {answer.wall_time_s:.2f} s"
@@ -156,20 +194,17 @@ def _echo(answer: Design) -> None:
         ("best (NLP)", answer.best),
         (f"best, IK re-solved ({answer.check_answer.ik.solver})", answer.check),
     ]
-    click.echo(
-        table(
-            ["", unit, "limiting group", "region", "load (%MVC)"],
-            [[name, s.value, s.group, s.region, s.load_pct_mvc] for name, s in rows],
-            digits=3,
-        )
-    )
-    units = "min" if answer.objective == "endurance" else "percentage points"
+    click.echo(_scores(answer, rows))
+    gain, digits = ("reduction", 1) if answer.objective == "compression" else ("gain", 3)
     ratio = "" if answer.ratio is None else f" (×{fmt(answer.ratio, 3)})"
-    click.echo(f"\ngain (IK re-solved at the design): {_signed(answer.gain)} {units}{ratio}")
+    click.echo(
+        f"\n{gain} (IK re-solved at the design): {_signed(answer.gain, digits)} "
+        f"{answer.gain_unit}{ratio}"
+    )
     tolerance = answer.to_dict()["check"]["tolerance"]
     verdict = "agrees" if answer.agrees else "DIFFERS"
     click.echo(
-        f"re-solve check: {verdict} with the NLP's gain {_signed(answer.nlp_gain)} "
+        f"re-solve check: {verdict} with the NLP's {gain} {_signed(answer.nlp_gain, digits)} "
         f"(tolerance {tolerance})"
     )
     for note in answer.notes:

@@ -1,6 +1,6 @@
 """Figures of a design (``casadi-posture design --out``): the objective by the re-solved IK
-over one free quantity's bounds, or the loads of the groups at the start and the best
-design when several quantities are free."""
+over one free quantity's bounds, or, when several quantities are free, the loads of the
+groups (or the L5/S1 compression) at the start and the best design."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.design import Design, SweepPoint
 from casadi_posture.output.saving import save_figure
 
@@ -24,7 +25,20 @@ SHOWN_GROUPS = 12
 def _label(design: Design) -> str:
     if design.objective == "endurance":
         return "endurance of the limiting group (min)"
+    if design.objective == "compression":
+        return "L5/S1 compression (N), lower is better"
     return f"share of {design.objective.removeprefix('capable-')}s capable (%)"
+
+
+def _niosh(ax: plt.Axes, highest: float) -> float:
+    """The NIOSH design limit [N] as a dashed line, and the upper limit when the ``highest``
+    compression shown [N] is above the design limit; returns the top that shows them [N]."""
+    limit = compression_limits()
+    ax.axhline(limit["design"], color="tab:orange", lw=1.0, ls="--", label="NIOSH design limit")
+    if highest <= limit["design"]:
+        return limit["design"] * 1.1
+    ax.axhline(limit["upper"], color="tab:red", lw=1.0, ls="--", label="NIOSH upper limit")
+    return limit["upper"] * 1.1
 
 
 def plot_sweep(design: Design, points: Sequence[SweepPoint], path: Path) -> Path:
@@ -38,7 +52,8 @@ def plot_sweep(design: Design, points: Sequence[SweepPoint], path: Path) -> Path
     kept = np.array([p.kept for p in points])
     finite = np.isfinite(y)
     marks = [design.start.value, design.best.value, design.check.value]
-    top = max([*y[finite], *(v for v in marks if math.isfinite(v)), 1e-9]) * 1.15
+    highest = max([*y[finite], *(v for v in marks if math.isfinite(v)), 1e-9])
+    top = highest * 1.15
     fig, ax = plt.subplots(figsize=(7.0, 4.5), dpi=120)
     good = kept & finite
     ax.plot(x[good], y[good], "o-", color="tab:blue", lw=1.5, ms=4, label="IK re-solved")
@@ -79,6 +94,8 @@ def plot_sweep(design: Design, points: Sequence[SweepPoint], path: Path) -> Path
             zorder=3,
         )
     ax.axvline(design.best_m[0], color="tab:red", lw=0.8, ls=":")
+    if design.objective == "compression":
+        top = max(top, _niosh(ax, highest))
     ax.set_ylim(0.0, top * 1.05)
     pad = 0.02 * (free.upper_m - free.lower_m)
     ax.set_xlim(free.lower_m - pad, free.upper_m + pad)
@@ -110,6 +127,23 @@ def plot_loads(design: Design, path: Path) -> Path:
     ax.set_title(
         f"{design.problem.path.name}: group loads, design for {design.objective}", fontsize=10
     )
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_figure(fig, path)
+
+
+def plot_compression(design: Design, path: Path) -> Path:
+    """The L5/S1 compression [N] at the start (IK), at the best design (NLP posture) and by
+    the IK re-solved there, with the NIOSH limits."""
+    names = ["start (IK)", "best (NLP)", "best, IK re-solved"]
+    values = [design.start.value, design.best.value, design.check.value]
+    fig, ax = plt.subplots(figsize=(6.0, 4.5), dpi=120)
+    bars = ax.bar(names, values, 0.5, color=["0.55", "tab:red", "tab:orange"])
+    ax.bar_label(bars, fmt="%.0f N", fontsize=8)
+    top = max(max(values) * 1.15, _niosh(ax, max(values)))
+    ax.set_ylim(0.0, top * 1.05)
+    ax.set_ylabel(_label(design))
+    ax.set_title(f"{design.problem.path.name}: design for compression", fontsize=10)
     ax.grid(axis="y", alpha=0.3)
     ax.legend(fontsize=8)
     return save_figure(fig, path)
