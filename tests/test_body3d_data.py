@@ -123,9 +123,17 @@ ANDERSON = {
 }
 
 
-def _anderson_age_group(age: float) -> str:
-    """The documented rule: < 40 y young, 40-65 y middle-aged, > 65 y older."""
-    return "young" if age < 40 else "middle_aged" if age <= 65 else "older"
+def _age_factor(sex: str, age: float) -> float:
+    """The documented decline: men 0.15 %/year from 25 to 52 y, then 1.3 %/year; women
+    unchanged to 40 y, then 0.86 %/year."""
+    if sex == "male":
+        return 1 - (0.15 * (min(max(age, 25), 52) - 25) + 1.3 * max(age - 52, 0)) / 100
+    return 1 - 0.86 * max(age - 40, 0) / 100
+
+
+def _pooled_cv(group: str, sex: str) -> float:
+    rows = ANDERSON[group][sex]
+    return math.sqrt(sum((sd / c1) ** 2 for c1, sd in (rows["young"], rows["middle_aged"])) / 2)
 
 
 #: RBDL Gymnast τ_ISO [N·m] (GymnastWholeBody); elbow flexion 101.384.
@@ -188,35 +196,70 @@ def test_harbo_sex_and_reference_values() -> None:
 @pytest.mark.parametrize("body", BODIES, ids=lambda b: f"{b['sex']}-{b['age']:g}")
 @pytest.mark.parametrize("group", sorted(ANDERSON))
 def test_anderson_groups_by_hand(group: str, body: dict) -> None:
-    age_group = _anderson_age_group(body["age"])
-    c1, sd = ANDERSON[group][body["sex"]][age_group]
+    """The young row's c1 × m·g·h × the age factor, with the pooled CV in the record."""
+    c1, _ = ANDERSON[group][body["sex"]]["young"]
     mgh = body["body_mass"] * G * body["stature"]
     model, record = default_strength(group, **body)
-    assert model.value == pytest.approx(c1 * mgh, rel=1e-12)
-    assert f"SD {sd:g} × m·g·h = {sd * mgh:.2f} N·m" in record.source
-    table = parameters.load("strength")
-    stored = table[f"strength.anderson_2007.{group}.{body['sex']}.{age_group}.c1_sd"]
-    assert stored.value == sd and stored.unit == "1"
+    factor = _age_factor(body["sex"], body["age"])
+    assert model.value == pytest.approx(c1 * mgh * factor, rel=1e-12)
+    assert f"× {factor:.4f} = {model.value:.2f} N·m" in record.source
+    assert f"CV {_pooled_cv(group, body['sex']):.3f}" in record.source
 
 
-@pytest.mark.parametrize("age", [18.0, 39.9, 40.0, 65.0, 65.1, 100.0])
+@pytest.mark.parametrize("age", [18.0, 25.0, 39.9, 40.0, 52.0, 65.0, 75.0, 100.0])
 @pytest.mark.parametrize("sex", ["male", "female"])
-def test_anderson_rows_by_age(age: float, sex: str) -> None:
-    """Every Anderson age group is reached at its ages, on both sides of each boundary."""
-    c1, _ = ANDERSON["knee_flexors"][sex][_anderson_age_group(age)]
+def test_age_factor_by_hand(age: float, sex: str) -> None:
+    """The factor on both sides of each breakpoint, for a measured and an estimated group."""
     body = {**MALE, "sex": sex, "age": age}
-    model, record = default_strength("knee_flexors", **body)
-    assert model.value == pytest.approx(c1 * body["body_mass"] * G * body["stature"], rel=1e-12)
-    assert f"age {age:g} y: the" in record.source
+    mgh = body["body_mass"] * G * body["stature"]
+    young = ANDERSON["knee_flexors"][sex]["young"][0]
+    assert default_strength("knee_flexors", **body)[0].value == pytest.approx(
+        young * mgh * _age_factor(sex, age), rel=1e-12
+    )
+    assert default_strength("hip_abductors", **body)[0].value == pytest.approx(
+        ESTIMATE["hip_abductors"] * mgh * _age_factor(sex, age), rel=1e-12
+    )
+
+
+def test_age_factor_within_the_published_declines() -> None:
+    """Never rising with age; at 75 y men within Danneskiold-Samsøe's 54-89 % of the young
+    value, women within 48-92 %; men lose 12-15 % a decade past 52 y (Hurley 1995), women
+    6.2-9.3 % a decade past 40 y (Hunter 2000)."""
+    ages = np.arange(18.0, 100.5, 0.5)
+    for sex in ("male", "female"):
+        factors = [
+            default_strength("knee_flexors", **{**MALE, "sex": sex, "age": a})[0].value
+            for a in ages
+        ]
+        assert np.all(np.diff(factors) <= 1e-12) and min(factors) > 0
+    value = {
+        s: default_strength("knee_flexors", **{**MALE, "sex": s, "age": 75.0})[0].value
+        for s in ("male", "female")
+    }
+    young = {
+        s: default_strength("knee_flexors", **{**MALE, "sex": s, "age": 25.0})[0].value
+        for s in ("male", "female")
+    }
+    assert 0.54 <= value["male"] / young["male"] <= 0.89
+    assert 0.48 <= value["female"] / young["female"] <= 0.92
+    decade = {
+        s: 1
+        - default_strength("knee_flexors", **{**MALE, "sex": s, "age": a + 10})[0].value
+        / default_strength("knee_flexors", **{**MALE, "sex": s, "age": a})[0].value
+        for s, a in (("male", 52.0), ("female", 40.0))
+    }
+    assert 0.12 <= decade["male"] <= 0.15
+    assert 0.062 <= decade["female"] <= 0.093
 
 
 def test_anderson_reference_values() -> None:
-    """The reference male's hip extensors 201 N·m, knee extensors 203, plantarflexors 118;
-    the female's knee extensors 168 N·m."""
-    assert default_strength("hip_extensors", **MALE)[0].value == pytest.approx(200.7, abs=0.05)
-    assert default_strength("knee_extensors", **MALE)[0].value == pytest.approx(203.2, abs=0.05)
+    """The reference male at 30 y (age factor 0.9925): hip extensors 199.2 N·m, knee
+    extensors 201.7, plantarflexors 117.6; the female's knee extensors 167.5 N·m (factor 1
+    up to 40 y)."""
+    assert default_strength("hip_extensors", **MALE)[0].value == pytest.approx(199.2, abs=0.05)
+    assert default_strength("knee_extensors", **MALE)[0].value == pytest.approx(201.7, abs=0.05)
     assert default_strength("ankle_plantarflexors", **MALE)[0].value == pytest.approx(
-        118.4, abs=0.05
+        117.6, abs=0.05
     )
     assert default_strength("knee_extensors", **FEMALE)[0].value == pytest.approx(167.5, abs=0.05)
 
@@ -237,7 +280,8 @@ def test_gymnast_ratio_groups_by_hand(group: str, body: dict) -> None:
 def test_estimated_groups(group: str, body: dict) -> None:
     model, record = default_strength(group, **body)
     mgh = body["body_mass"] * G * body["stature"]
-    assert model.value == pytest.approx(ESTIMATE[group] * mgh, rel=1e-12)
+    factor = _age_factor(body["sex"], body["age"])
+    assert model.value == pytest.approx(ESTIMATE[group] * mgh * factor, rel=1e-12)
     assert record.status == "estimate" and record.evidence == "E"
     assert "Our estimate" in record.source and "no population" in record.source
 

@@ -45,19 +45,22 @@ def _group(answer: cp.StaticAnswer, name: str) -> dict:
 
 
 def test_anderson_group_by_hand(standing: cp.StaticAnswer) -> None:
-    """Right hip extensors of the 30-year-old reference male: Anderson 2007 young adults,
-    c1 0.161 ± 0.049 (men), 0.181 ± 0.047 (women), times m·g·h."""
+    """Right hip extensors of the 30-year-old reference male: Anderson 2007 young adults'
+    c1 0.161 (men), 0.181 (women) times m·g·h and the age factor (men 1 − 0.0015·5, women 1
+    before 40 y); CV the root mean square of the young and middle-aged rows' SD/c1 (men
+    0.049/0.161 and 0.043/0.171, women 0.047/0.181 and 0.032/0.140)."""
     body = standing.problem.spec.body
     mgh = body.mass_kg * G * body.stature_m
     group = _group(standing, "hip_extensors_r")
     tau = group["torque_Nm"]
     assert tau > 1.0  # loaded, so the share is not the carries-nothing 100 %
-    assert group["capable_male_pct"] == pytest.approx(
-        _above(0.161 * mgh, 0.049 * mgh, tau), abs=1e-9
-    )
-    assert group["capable_female_pct"] == pytest.approx(
-        _above(0.181 * mgh, 0.047 * mgh, tau), abs=1e-9
-    )
+    for sex, mean, rows in (
+        ("male", 0.161 * mgh * 0.9925, ((0.161, 0.049), (0.171, 0.043))),
+        ("female", 0.181 * mgh, ((0.181, 0.047), (0.140, 0.032))),
+    ):
+        cv = math.sqrt(sum((sd / c1) ** 2 for c1, sd in rows) / 2)
+        assert group[f"mean_{sex}_Nm"] == pytest.approx(mean, rel=1e-12)
+        assert group[f"capable_{sex}_pct"] == pytest.approx(_above(mean, cv * mean, tau), abs=1e-9)
     assert group["sd_status"] == "measured" and "Anderson 2007" in group["sd_source"]
 
 
@@ -75,18 +78,23 @@ def test_cv_estimate_group_by_hand(standing: cp.StaticAnswer) -> None:
     assert group["sd_status"] == "estimate" and "CV 0.28" in group["sd_source"]
 
 
-def test_older_rows_by_age() -> None:
-    """A 70-year-old woman's knee extensors take Anderson's older row: 0.124 ± 0.018; a
-    50-year-old man's the middle-aged one: 0.156 ± 0.031."""
-    for sex, age, c1, sd in (("female", 70.0, 0.124, 0.018), ("male", 50.0, 0.156, 0.031)):
+def test_older_bodies_by_age() -> None:
+    """A 70-year-old woman's knee extensors: the young c1 0.159 × (1 − 0.0086·30); a
+    50-year-old man's: 0.163 × (1 − 0.0015·25); the same pooled CV at every age (women
+    0.028/0.159 and 0.016/0.128, men 0.040/0.163 and 0.031/0.156), never the older row's."""
+    for sex, age, c1, factor, rows in (
+        ("female", 70.0, 0.159, 1 - 0.0086 * 30, ((0.159, 0.028), (0.128, 0.016))),
+        ("male", 50.0, 0.163, 1 - 0.0015 * 25, ((0.163, 0.040), (0.156, 0.031))),
+    ):
         problem = cp.load(
             PROBLEMS / "standing_shelf_box.toml", {"body.age_years": age, "body.sex": sex}
         )
         answer = cp.torques(problem)
         mgh = problem.spec.body.mass_kg * G * problem.spec.body.stature_m
         group = _group(answer, "knee_extensors_r")
-        assert group[f"mean_{sex}_Nm"] == pytest.approx(c1 * mgh, rel=1e-12)
-        assert group[f"sd_{sex}_Nm"] == pytest.approx(sd * mgh, rel=1e-12)
+        cv = math.sqrt(sum((sd / c) ** 2 for c, sd in rows) / 2)
+        assert group[f"mean_{sex}_Nm"] == pytest.approx(c1 * factor * mgh, rel=1e-12)
+        assert group[f"sd_{sex}_Nm"] == pytest.approx(cv * c1 * factor * mgh, rel=1e-12)
 
 
 def test_share_decreases_with_the_load() -> None:

@@ -12,8 +12,8 @@ carries nothing (τ_g = 0) counts as 100 %.
 Means: the shipped default strength of the group's name for each sex at the problem's
 stature, mass and age (``default_strength``). A group whose strength the problem file sets
 (``strength_Nm``, ``strength_curve``) takes the problem's strength as the mean for both
-sexes. SDs: σ = CV × μ, with CV = c1_sd / c1 of Anderson et al. 2007 for hip, knee and ankle
-flexion/extension (a measured spread, so σ = c1_sd·m·g·h for a default mean), else the
+sexes. SDs: σ = CV × μ, with CV the c1_sd / c1 of Anderson et al. 2007 pooled over its young and
+middle-aged rows for hip, knee and ankle flexion/extension (a measured spread), else the
 estimate ``strength.population_cv`` (``strength.toml``).
 """
 
@@ -27,7 +27,7 @@ from typing import Any, Literal
 import casadi as ca
 import numpy as np
 
-from casadi_posture.biomech.strength import anderson_row, default_strength
+from casadi_posture.biomech.strength import anderson_young, default_strength
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import data_name
 from casadi_posture.spec.schema import BodySpec
@@ -172,7 +172,7 @@ def population(
     mean of a group whose strength the file sets (``own``: group -> where it is set)."""
     out = []
     for k, name in enumerate(groups):
-        cv, sd_source, sd_status = _spread(data_name(name), body.age_years)
+        cv, sd_source, sd_status = _spread(data_name(name))
         if name in own:
             mean = dict.fromkeys(SEXES, float(strength[k]))
             source = f"the problem's own strength, for both sexes ({own[name]})"
@@ -196,10 +196,11 @@ def population(
     return tuple(out)
 
 
-def _spread(group: str, age: float) -> tuple[dict[Sex, float], str, SdStatus]:
+def _spread(group: str) -> tuple[dict[Sex, float], str, SdStatus]:
     """The coefficient of variation of a group's strength per sex, its source and status:
-    Anderson 2007's c1_sd/c1 of the age group where it has data, else our estimate."""
-    rows = {sex: anderson_row(group, sex, age) for sex in SEXES}
+    Anderson 2007's, pooled over its young and middle-aged rows, where it has data, else our
+    estimate."""
+    rows = {sex: anderson_young(group, sex) for sex in SEXES}
     male, female = rows["male"], rows["female"]
     if male is None or female is None:
         cv = population_cv()
@@ -208,10 +209,10 @@ def _spread(group: str, age: float) -> tuple[dict[Sex, float], str, SdStatus]:
             f"CV {cv.value:g} × mean ({cv.source})",
             "estimate",
         )
-    ratios = {"male": male[1].value / male[0].value, "female": female[1].value / female[0].value}
+    ratios: dict[Sex, float] = {"male": male[1], "female": female[1]}
     source = (
-        f"Anderson 2007 c1 SD/mean, {male[2]}: male {ratios['male']:.3f}, "
-        f"female {ratios['female']:.3f} ({male[0].source})"
+        f"Anderson 2007 c1 SD/mean, root mean square of the young and middle-aged rows: "
+        f"male {ratios['male']:.3f}, female {ratios['female']:.3f} ({male[0].source})"
     )
     return ratios, source, "measured"
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -59,8 +60,9 @@ def default_strength(
     without it are used, the record keeps the full name. By the table the group is in:
     the elbow flexors from the Harbo et al. 2012 regression at this stature [m], body mass
     [kg] and age [years] times the group's Gymnast strength ratio; the group's own Harbo
-    regression; Anderson et al. 2007 c1·m·g·h of the sex and age group (:func:`anderson_row`);
-    or our estimate c·m·g·h. The record's source shows the computation.
+    regression; Anderson et al. 2007 young adults' c1·m·g·h of the sex (:func:`anderson_young`)
+    or our estimate c·m·g·h, both times :func:`age_factor`. The record's source shows the
+    computation.
     """
     group = data_name(half_joint)
     table = parameters.load("strength")
@@ -81,25 +83,25 @@ def default_strength(
             f" = {value:.2f} N·m ({record.source})"
         )
         evidence = record.evidence
-    elif (row := anderson_row(group, sex, age)) is not None:
-        record, sd_record, rule = row
-        sd = sd_record.value
+    elif (young := anderson_young(group, sex)) is not None:
+        c1, cv = young
+        factor, rule = age_factor(sex, age)
         g = table["strength.anderson_2007.gravity"].value
-        mgh = body_mass * g * stature
-        value = record.value * mgh
+        value = c1.value * body_mass * g * stature * factor
         source = (
-            f"Anderson 2007 c1·m·g·h ({sex}, {rule}): {record.value:g} × "
-            f"{body_mass:g} kg × {g:g} m/s² × {stature:g} m = {value:.2f} N·m; "
-            f"SD {sd:g} × m·g·h = {sd * mgh:.2f} N·m ({record.source})"
+            f"Anderson 2007 young adults' c1·m·g·h × age factor ({sex}): {c1.value:g} × "
+            f"{body_mass:g} kg × {g:g} m/s² × {stature:g} m × {factor:.4f} = {value:.2f} N·m "
+            f"({rule}); CV {cv:.3f} ({c1.source})"
         )
-        evidence = record.evidence
+        evidence = c1.evidence
     else:
         record = table[f"strength.estimate.{group}.c"]
+        factor, rule = age_factor(sex, age)
         g = table["strength.anderson_2007.gravity"].value
-        value = record.value * body_mass * g * stature
+        value = record.value * body_mass * g * stature * factor
         source = (
-            f"c·m·g·h: {record.value:g} × {body_mass:g} kg × {g:g} m/s² × {stature:g} m"
-            f" = {value:.2f} N·m ({record.source})"
+            f"c·m·g·h × age factor: {record.value:g} × {body_mass:g} kg × {g:g} m/s² × "
+            f"{stature:g} m × {factor:.4f} = {value:.2f} N·m ({record.source}; {rule})"
         )
         evidence = record.evidence
     record = Parameter(
@@ -124,37 +126,43 @@ def _harbo(
     return value, c, table[f"strength.{prefix}.{sex}.intercept"]
 
 
-#: Anderson 2007's age groups: our name and the ages of its sample.
-ANDERSON_AGE_GROUPS = {"young": "18-25 y", "middle_aged": "55-65 y", "older": "> 65 y"}
 #: Records of the ``anderson_2007`` table that are not muscle groups.
-_ANDERSON_SETTINGS = ("gravity", "middle_aged_from_years", "older_above_years")
+_ANDERSON_SETTINGS = ("gravity",)
+#: Anderson 2007's rows whose SDs make the population's spread (its older row: 3 people a sex).
+_POOLED_ROWS = ("young", "middle_aged")
+_AGE_KEYS = ("reference_years", "breakpoint_years", "pct_per_year_before", "pct_per_year_after")
 
 
-def anderson_age_group(age: float) -> tuple[str, str]:
-    """The Anderson 2007 age group for a body of ``age`` [years], and the rule in words:
-    young below ``middle_aged_from_years`` (40), middle-aged up to ``older_above_years``
-    (65), older above (``strength.toml``)."""
+def age_factor(sex: str, age: float) -> tuple[float, str]:
+    """The strength at ``age`` [years] as a fraction of the young adult's, for ``sex``
+    (``strength.age_decline``: 1 up to the reference age, then falling linearly, at one
+    rate up to the breakpoint and another beyond), and the rule in words."""
     table = parameters.load("strength")
-    middle = table["strength.anderson_2007.middle_aged_from_years"].value
-    older = table["strength.anderson_2007.older_above_years"].value
-    name = "young" if age < middle else "middle_aged" if age <= older else "older"
+    c = {k: table[f"strength.age_decline.{sex}.{k}"].value for k in _AGE_KEYS}
+    start, knee = c["reference_years"], c["breakpoint_years"]
+    before = min(max(age, start), knee) - start
+    after = max(age - knee, 0.0)
+    factor = 1.0 - (c["pct_per_year_before"] * before + c["pct_per_year_after"] * after) / 100.0
     rule = (
-        f"age {age:g} y: the {name.replace('_', '-')} row ({ANDERSON_AGE_GROUPS[name]}; "
-        f"rule: < {middle:g} y young, {middle:g}-{older:g} y middle-aged, > {older:g} y older)"
+        f"age {age:g} y: 1 to {start:g} y, −{c['pct_per_year_before']:g} %/year to {knee:g} y, "
+        f"−{c['pct_per_year_after']:g} %/year beyond"
     )
-    return name, rule
+    return factor, rule
 
 
-def anderson_row(group: str, sex: str, age: float) -> tuple[Parameter, Parameter, str] | None:
-    """The Anderson 2007 records ``c1`` and ``c1_sd`` of ``group`` (a name without side
-    suffix) for ``sex`` at ``age`` [years], and the age rule in words; None when the group has
-    no Anderson data."""
-    name, rule = anderson_age_group(age)
-    prefix = f"strength.anderson_2007.{group}.{sex}.{name}"
+def anderson_young(group: str, sex: str) -> tuple[Parameter, float] | None:
+    """Anderson 2007's young adults' ``c1`` record of ``group`` (a name without side suffix)
+    for ``sex`` and the group's coefficient of variation, pooled over the young and
+    middle-aged rows (root mean square of c1_sd/c1); None when the group has no data."""
     table = parameters.load("strength")
-    if f"{prefix}.c1" not in table:
+    prefix = f"strength.anderson_2007.{group}.{sex}"
+    if f"{prefix}.young.c1" not in table:
         return None
-    return table[f"{prefix}.c1"], table[f"{prefix}.c1_sd"], rule
+    ratios = [
+        table[f"{prefix}.{row}.c1_sd"].value / table[f"{prefix}.{row}.c1"].value
+        for row in _POOLED_ROWS
+    ]
+    return table[f"{prefix}.young.c1"], math.sqrt(sum(r * r for r in ratios) / len(ratios))
 
 
 def known_groups() -> Sequence[str]:
