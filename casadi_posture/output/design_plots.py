@@ -14,6 +14,7 @@ import numpy as np
 from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.design import Design, SweepPoint
 from casadi_posture.output.saving import save_figure
+from casadi_posture.runs.axes import axis_label, with_unit
 
 #: Points of the one-key sweep over its bounds.
 SWEEP_POINTS = 15
@@ -99,7 +100,7 @@ def plot_sweep(design: Design, points: Sequence[SweepPoint], path: Path) -> Path
     ax.set_ylim(0.0, top * 1.05)
     pad = 0.02 * (free.upper_m - free.lower_m)
     ax.set_xlim(free.lower_m - pad, free.upper_m + pad)
-    ax.set_xlabel(f"{free.name} (m)")
+    ax.set_xlabel(with_unit(*axis_label(design.problem.data, free.name)))
     ax.set_ylabel(_label(design))
     ax.set_title(f"{design.problem.path.name}: design for {design.objective}", fontsize=10)
     ax.grid(alpha=0.3)
