@@ -27,6 +27,7 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.animation import check_format, write_animation
+from casadi_posture.output.axes import axis_keys, axis_label
 from casadi_posture.output.plain import plain
 from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
 from casadi_posture.output.results import (
@@ -44,7 +45,6 @@ from casadi_posture.problem import (
     text_sha256,
 )
 from casadi_posture.runs import compare as comparison
-from casadi_posture.runs.axes import axis_keys, axis_label
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
 from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
 from casadi_posture.runs.whatif_plots import plot_outcomes

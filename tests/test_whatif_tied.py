@@ -12,9 +12,9 @@ from conftest import PROBLEMS
 
 import casadi_posture as cp
 from casadi_posture.cli import main
+from casadi_posture.output.axes import axis_label
 from casadi_posture.problem import load_problem
 from casadi_posture.runs import whatif_plots
-from casadi_posture.runs.axes import axis_label
 from casadi_posture.runs.whatif import grid
 
 SHELF = PROBLEMS / "standing_shelf_box.toml"

@@ -457,7 +457,7 @@ def whatif(
       casadi-posture whatif problems/standing_shelf_box.toml --static \\
           --vary 'tasks[2].target_m[2],tasks[3].target_m[2]=1.0,1.2,1.4'
     """
-    from casadi_posture.runs.axes import axis_value
+    from casadi_posture.output.axes import axis_value
     from casadi_posture.runs.whatif import parse_vary
 
     parsed = [parse_vary(text, problem, unique=not paired) for text in varies]

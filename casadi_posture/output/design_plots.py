@@ -13,8 +13,8 @@ import numpy as np
 
 from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.design import Design, SweepPoint
+from casadi_posture.output.axes import axis_label, with_unit
 from casadi_posture.output.saving import save_figure
-from casadi_posture.runs.axes import axis_label, with_unit
 
 #: Points of the one-key sweep over its bounds.
 SWEEP_POINTS = 15

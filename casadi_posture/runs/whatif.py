@@ -9,8 +9,8 @@ from typing import Any
 
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import check_solver
+from casadi_posture.output.axes import SOLVER, axis_keys, check_units
 from casadi_posture.problem import load_problem, read_problem_text, text_sha256
-from casadi_posture.runs.axes import SOLVER, axis_keys, check_units
 from casadi_posture.runs.batch import Case, safe_name
 from casadi_posture.spec.overrides import parse_value
 

@@ -1,5 +1,5 @@
 """A what-if's figures: one per answer against the first varied axis, one line per value of
-the other axes, the axes named in words (runs/axes.py)."""
+the other axes, the axes named in words (output/axes.py)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ import numpy as np
 
 from casadi_posture.biomech.capability import DESIGN_LIMIT_PCT, PEOPLE, SEXES
 from casadi_posture.biomech.low_back import limits as back_limits
+from casadi_posture.output.axes import axis_value, with_unit
 from casadi_posture.output.saving import save_figure
 from casadi_posture.output.score_plots import BAND_COLOURS, bands
-from casadi_posture.runs.axes import axis_value, with_unit
 from casadi_posture.runs.batch import safe_name
 
 #: The answers drawn, with their axis labels; one figure each.
