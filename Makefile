@@ -8,14 +8,15 @@ TEST_WORKERS ?= auto
 
 .PHONY: demo test lint benchmark clean
 
-# One stamp per install: the demo needs only the package; the tests add pinocchio,
+# One stamp per install: the demo needs the package and pandas (the README's Python
+# example makes DataFrames); the tests add pinocchio,
 # pytest-xdist, hypothesis, pandas, pyarrow and dask; lint and the benchmarks add ruff.
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(VENV)/.demo: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet -e '.[pandas]'
 	touch $@
 
 $(VENV)/.test: pyproject.toml | $(BIN)/python

@@ -7,9 +7,11 @@ import json
 import re
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
 
+import casadi_posture as cp
 from casadi_posture.cli import main
 from casadi_posture.runs.whatif_plots import OUTCOMES
 
@@ -18,7 +20,7 @@ HOLD = PROBLEMS / "holding_m45.toml"
 
 def test_init_writes_a_file_that_validates_and_refuses_to_overwrite(tmp_path: Path) -> None:
     runner = CliRunner()
-    for name in ("hold", "elbow", "tree"):
+    for name in ("hold", "elbow", "tree", "shelf", "seated"):
         path = tmp_path / f"{name}.toml"
         assert runner.invoke(main, ["init", name, str(path)]).exit_code == 0
         assert runner.invoke(main, ["validate", str(path)]).exit_code == 0
@@ -26,6 +28,18 @@ def test_init_writes_a_file_that_validates_and_refuses_to_overwrite(tmp_path: Pa
         assert again.exit_code == 2 and "--force" in again.stderr
         assert runner.invoke(main, ["init", name, str(path), "--force"]).exit_code == 0
     assert runner.invoke(main, ["init", str(tmp_path / "default.toml")]).exit_code == 0
+
+
+@pytest.mark.parametrize("name", ["shelf", "seated"])
+def test_the_3d_templates_hold_their_task_plausibly(name: str, tmp_path: Path) -> None:
+    """A newcomer's first 3-D file: solved without a flag (the task achieved, balanced, no
+    posture a source calls extreme), a two-hand task held mirror-symmetrically."""
+    path = tmp_path / f"{name}.toml"
+    assert CliRunner().invoke(main, ["init", name, str(path)]).exit_code == 0
+    answer = cp.solve(cp.load(path))
+    assert answer.reached and not answer.flags, answer.flags
+    if name == "shelf":
+        assert answer.plausibility.asymmetry_deg < 1e-3
 
 
 def test_rerun_reproduces_the_summary_byte_for_byte(tmp_path: Path) -> None:

@@ -58,3 +58,16 @@ def test_readme_example_runs_as_shown(
 
 def test_readme_has_examples() -> None:
     assert len(_examples()) >= 3
+
+
+def test_readme_names_every_shipped_model() -> None:
+    """No stale status: the README names each body model the package ships, and the
+    templates `init` offers."""
+    from casadi_posture.body.models import MODELS
+    from casadi_posture.data.templates import TEMPLATES
+
+    text = (ROOT / "README.md").read_text()
+    for name in MODELS:
+        assert f"`{name}`" in text, name
+    for name in ("shelf", "seated", "tree"):
+        assert name in TEMPLATES and f"init {name}" in text, name

@@ -40,14 +40,17 @@ def _templates_or_files(
 def init(template_or_file: str, file: Path | None, force: bool) -> None:
     """Write a commented problem file to start from: TEMPLATE is hold (the default: a load
     held with the wrist on a line, the paper's experiment), elbow (only the elbow moves,
-    the paper's Fig. 3) or tree (a 3-DOF arm described in the file: a body of your own).
-    Every key is explained in the file.
+    the paper's Fig. 3), tree (a 3-DOF arm described in the file: a body of your own),
+    shelf (a standing person, a box in both hands at a shelf) or seated (a seated person,
+    a part on a table). Every key is explained in the file.
 
     \b
     Example:
       casadi-posture init my_hold.toml
       casadi-posture init elbow my_elbow.toml
       casadi-posture init tree my_arm.toml
+      casadi-posture init shelf my_shelf.toml
+      casadi-posture init seated my_bench.toml
     """
     if file is None and template_or_file in TEMPLATES:
         raise ProblemError(None, "FILE", MISSING, f"the file to write after {template_or_file}")

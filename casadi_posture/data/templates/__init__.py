@@ -9,6 +9,8 @@ TEMPLATES = {
     "hold": "a load held with the wrist on a line, the paper's holding experiment",
     "elbow": "only the elbow moves, with its torques over the range (the paper's Fig. 3)",
     "tree": "a body of your own: a 3-DOF arm described in the file, holding 1 kg at a point",
+    "shelf": "a standing person holding a 4 kg box with both hands at a shelf",
+    "seated": "a seated person holding a 1 kg part on a table with the right hand",
 }
 
 
