@@ -286,3 +286,31 @@ def test_a_passive_override_without_model_is_the_exponential(tmp_path: Path) -> 
         "passive = 'springy': expected one of 'exponential', 'limit_torque', 'gymnast_fit', 'none'"
         in result.stderr
     )
+
+
+@pytest.mark.parametrize("command", ["torques", "solve"])
+def test_a_3d_table_shows_the_most_loaded_groups_and_all_with_the_flag(command: str) -> None:
+    """On the 29-DOF body the table lists the ten half-joints of the largest load (as the
+    JSON ranks them) and their DOFs, then says how many more there are; --all lists all 58.
+    The 2-DOF arm's four groups are always all shown."""
+    path = str(PROBLEMS / "standing_wall_horizontal.toml")
+    data = json.loads(run(command, path, "--json").stdout)
+    groups = data["half_joints"] if command == "torques" else data["torques"]["half_joints"]
+    top = sorted(groups, key=lambda g: -g["load_pct_mvc"])[:10]
+    text = run(command, path).stdout
+    shown = [
+        line.split()[0]
+        for line in text.splitlines()
+        if line.split()[:1] and any(line.startswith(g["name"] + " ") for g in groups)
+    ]
+    assert sorted(shown) == sorted(g["name"] for g in top)
+    assert f"... {len(groups) - 10} more half-joints" in text
+    hidden = max(g["load_pct_mvc"] for g in groups if g not in top)
+    assert f"carry at most {hidden:.1f} %MVC" in text
+    every = run(command, path, "--all").stdout
+    assert sum(
+        any(line.startswith(g["name"] + " ") for g in groups) for line in every.splitlines()
+    ) == len(groups)
+    assert "more half-joints" not in every
+    arm = run(command, str(PROBLEMS / "holding_m45.toml")).stdout
+    assert "more half-joints" not in arm and "elbow_extensors" in arm

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 import click
@@ -137,12 +138,43 @@ def emit_json(data: Any) -> None:
     click.echo(dumps(data))
 
 
-def echo_torques(answer: StaticAnswer) -> None:
-    """The DOF table and the half-joint table of a static answer, and its endurance rule."""
+#: Half-joints a console table shows without --all: the most loaded ones.
+SHOWN_GROUPS = 10
+
+#: The --all flag of the commands that print a half-joint table.
+ALL_OPTION = click.option(
+    "--all",
+    "show_all",
+    is_flag=True,
+    help=f"Print every DOF and half-joint [default: the {SHOWN_GROUPS} most loaded half-joints "
+    "and their DOFs, on a body with more].",
+)
+
+
+def shown_groups(loads: Sequence[float], over: Sequence[bool], show_all: bool) -> list[int]:
+    """Indices of the half-joints a table shows: every one with ``show_all`` or on a body of
+    at most :data:`SHOWN_GROUPS`, else the most loaded [%MVC] (every one over strength among
+    them), in the body's order."""
+    order = sorted(range(len(loads)), key=lambda k: (not over[k], -loads[k]))
+    if show_all or len(loads) <= SHOWN_GROUPS:
+        return list(range(len(loads)))
+    keep = order[:SHOWN_GROUPS] + [k for k in order[SHOWN_GROUPS:] if over[k]]
+    return sorted(keep)
+
+
+def echo_torques(answer: StaticAnswer, show_all: bool = False) -> None:
+    """The DOF table and the half-joint table of a static answer (on a large body the most
+    loaded half-joints and their DOFs, unless ``show_all``), and its endurance rule."""
+    groups, capable = answer.groups, answer.capable.groups
+    loads = [g.load_pct_mvc for g in groups]
+    keep = shown_groups(loads, [g.over_strength for g in groups], show_all)
+    dofs = answer.dofs()
+    names = {groups[k].dof for k in keep}
+    shown_dofs = [d for d in dofs if len(keep) == len(groups) or d["name"] in names]
     click.echo(
         table(
             ["DOF", "angle (deg)", "external (N·m)", "passive (N·m)", "active (N·m)"],
-            [list(d.values()) for d in answer.dofs()],
+            [list(d.values()) for d in shown_dofs],
         )
     )
     click.echo()
@@ -161,21 +193,28 @@ def echo_torques(answer: StaticAnswer) -> None:
             ],
             [
                 [
-                    g.name,
-                    g.dof,
-                    g.strength,
-                    g.torque,
-                    g.load_pct_mvc,
-                    g.endurance_min,
-                    g.verdict.upper() if g.over_strength else g.verdict,
-                    c.capable_pct["male"],
-                    c.capable_pct["female"],
+                    groups[k].name,
+                    groups[k].dof,
+                    groups[k].strength,
+                    groups[k].torque,
+                    groups[k].load_pct_mvc,
+                    groups[k].endurance_min,
+                    groups[k].verdict.upper() if groups[k].over_strength else groups[k].verdict,
+                    capable[k].capable_pct["male"],
+                    capable[k].capable_pct["female"],
                 ]
-                for g, c in zip(answer.groups, answer.capable.groups, strict=True)
+                for k in keep
             ],
             digits=2,
         )
     )
+    hidden = [k for k in range(len(groups)) if k not in keep]
+    if hidden:
+        most = max(loads[k] for k in hidden)
+        click.echo(
+            f"... {len(hidden)} more half-joints ({len(dofs) - len(shown_dofs)} more DOFs) "
+            f"carry at most {most:.1f} %MVC; --all prints every row"
+        )
     click.echo(f"\nendurance rule: {answer.rule}")
     click.echo(answer.capable.task_line())
     click.echo(answer.capable.sd_line())

@@ -8,6 +8,7 @@ import click
 
 from casadi_posture import api
 from casadi_posture.cli.common import (
+    ALL_OPTION,
     FORCE_OPTION,
     SET_OPTION,
     SOLVER_OPTION,
@@ -29,8 +30,11 @@ from casadi_posture.runs.compare import rows
 @click.argument("problem", type=click.Path(dir_okay=False))
 @SOLVER_OPTION
 @SET_OPTION
+@ALL_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool) -> None:
+def solve(
+    problem: str, solver: str | None, sets: tuple[str, ...], show_all: bool, as_json: bool
+) -> None:
     """Solve the prioritized IK of a problem from its posture_deg; print the posture,
     the residual of each priority level and whether it was achieved, the active
     constraints and the torques there.
@@ -98,7 +102,7 @@ def solve(problem: str, solver: str | None, sets: tuple[str, ...], as_json: bool
         click.echo(f"\njoints at a limit: {limits}")
         echo_free_dofs(answer.problem)
         click.echo()
-        echo_torques(answer)
+        echo_torques(answer, show_all)
         for line in [*lines(answer.problem, answer.scores), *low_back.lines(answer.low_back)]:
             click.echo(line)
         for flag in answer.flags:

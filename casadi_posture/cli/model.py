@@ -11,6 +11,7 @@ from click.shell_completion import CompletionItem
 
 from casadi_posture import api
 from casadi_posture.cli.common import (
+    ALL_OPTION,
     FORCE_OPTION,
     SET_OPTION,
     echo_torques,
@@ -195,8 +196,11 @@ def describe(problem: str, sets: tuple[str, ...], as_json: bool) -> None:
     help="Set a DOF angle in degrees (repeatable); default: the file's posture_deg.",
 )
 @SET_OPTION
+@ALL_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
-def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_json: bool) -> None:
+def torques(
+    problem: str, postures: tuple[str, ...], sets: tuple[str, ...], show_all: bool, as_json: bool
+) -> None:
     """Per DOF the external, passive and active torque; per half-joint its load, endurance
     and a verdict: carries nothing, unlimited (the fatigue model accumulates nothing at
     this load), limited, or over strength (above 100 %MVC: endurance 0, the posture cannot
@@ -229,7 +233,7 @@ def torques(problem: str, postures: tuple[str, ...], sets: tuple[str, ...], as_j
         )
     else:
         click.echo(f"{problem} ({resolved.body.name})\n")
-        echo_torques(answer)
+        echo_torques(answer, show_all)
         for line in [*lines(answer.problem, answer.scores), *low_back.lines(answer.low_back)]:
             click.echo(line)
         for flag in answer.flags:
