@@ -63,6 +63,12 @@ def _busiest_view(scene: Scene, steps: list[int]) -> str:
     return max(sides, key=lambda name: motion[list(VIEWS[name][0])].sum())
 
 
+#: The animation's title on one line (9 inches at 10 points).
+ANIMATION_TITLE_WIDTH = 130
+#: Top of the fatigue strip's axis: room above fatigue 1 for its legend.
+STRIP_TOP = 1.5
+
+
 def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
     """Fatigue [0–1] over time [min] of the groups that owned the constraint (or of the
     most tired one), both thresholds, the constraint shaded; returns the time cursor."""
@@ -78,10 +84,11 @@ def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
     on = tl.owner >= 0
     if on.any():
         ax.fill_between(
-            minutes, 0, 1.05, where=on, color="0.88", step="post", zorder=0, label="constraint on"
+            minutes, 0, STRIP_TOP, where=on, color="0.88", step="post", zorder=0, label="constraint on"
         )
     ax.set_xlim(minutes[0], max(minutes[-1], minutes[0] + 1e-3))
-    ax.set_ylim(0, 1.05)
+    ax.set_ylim(0, STRIP_TOP)  # the legend sits above the curves (fatigue ≤ 1)
+    ax.set_yticks([0.0, 0.5, 1.0])
     ax.set_xlabel("time (min)", fontsize=8)
     ax.set_ylabel("fatigue", fontsize=8)
     ax.tick_params(labelsize=7)
@@ -140,7 +147,7 @@ class _Frames:
                 textwrap.fill(handle.get_label(), LEGEND_WIDTH, subsequent_indent="  ")
             )
         key.legend(handles=handles, loc="center left", fontsize=7, frameon=False, borderaxespad=0)
-        fig.suptitle(title(result), fontsize=10, y=0.985)
+        fig.suptitle(title(result, width=ANIMATION_TITLE_WIDTH), fontsize=10, y=0.985)
         self.state = fig.text(0.5, 0.925, "", ha="center", fontsize=9)
 
     def draw(self, step: int) -> None:

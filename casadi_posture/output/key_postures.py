@@ -3,6 +3,8 @@ each recovery, final), and the title every figure of the run carries."""
 
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib
 import numpy as np
 
@@ -15,14 +17,19 @@ DRAWN_RECOVERIES = 5
 Shown = tuple[int, str, object]
 
 
-def title(result: SimulationResult) -> str:
-    """Problem, strategy and solver, and whether the run was cut short."""
+#: Characters of a figure title's line: a longer title wraps instead of being cut off.
+TITLE_WIDTH = 70
+
+
+def title(result: SimulationResult, width: int = TITLE_WIDTH) -> str:
+    """Problem, strategy and solver, and whether the run was cut short, wrapped at
+    ``width`` characters (the default fits a figure 8 inches wide at 12 points)."""
     text = f"{result.problem.path.stem}: {result.settings.describe()}, {result.solver}"
     if result.stop == "interrupted":
         text += " (interrupted: partial run)"
     elif result.stop == "never_held":
         text += " (task never held)"
-    return text
+    return textwrap.fill(text, width)
 
 
 def recoveries(result: SimulationResult) -> list[int]:

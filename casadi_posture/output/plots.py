@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -12,6 +13,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from casadi_posture.biomech.curve import TorqueCurve
+from casadi_posture.data.parameters import data_name
 from casadi_posture.ergonomics.posture_scores import body_kind
 from casadi_posture.ik.tasks import Line, Plane, Position
 from casadi_posture.output.figures3d import plot_postures_3d
@@ -58,20 +60,39 @@ def plot_torque_curve(curve: TorqueCurve, path: Path, title: str) -> Path:
 #: Loaded groups whose legend fits inside fatigue.png's axes.
 INSIDE_LEGEND = 6
 
+#: A group gets a line in fatigue.png when its fatigue passes this level (1 %).
+DRAWN_MIN_FATIGUE = 0.01
+
 
 def plot_fatigue(result: SimulationResult, path: Path) -> Path:
-    """Fatigue of every loaded half-joint over time with both thresholds (paper Fig. 9);
-    more than :data:`INSIDE_LEGEND` groups get 20 colours and a legend beside the axes."""
+    """Fatigue of every half-joint above 1 % over time with both thresholds (paper Fig. 9):
+    a group's right and left sides in one colour, the left dashed (and said so where they
+    coincide); more than :data:`INSIDE_LEGEND` groups get a legend beside the axes."""
     tl, s = result.timeline, result.settings
-    loaded = [k for k in range(tl.fatigue.shape[1]) if tl.fatigue[:, k].max() > 0]
-    many = len(loaded) > INSIDE_LEGEND
+    halves = result.problem.body.half_joints
+    peak = tl.fatigue.max(axis=0) if tl.fatigue.size else np.zeros(len(halves))
+    drawn = [k for k in range(len(halves)) if peak[k] >= DRAWN_MIN_FATIGUE]
+    drawn = drawn or [k for k in range(len(halves)) if peak[k] > 0]
+    many = len(drawn) > INSIDE_LEGEND
     fig, ax = plt.subplots(figsize=(9.5 if many else 7.0, 4.0), dpi=120)
-    if many:
-        ax.set_prop_cycle(color=matplotlib.colormaps["tab20"].colors)
-    for k in loaded:
+    colours = matplotlib.colormaps["tab10"].colors
+    groups = list(dict.fromkeys(data_name(halves[k].name) for k in drawn))
+    same = []
+    for k in drawn:
+        name = halves[k].name
+        left = name.endswith("_l")
         ax.plot(
-            tl.time / 60, tl.fatigue[:, k], lw=1.8, label=result.problem.body.half_joints[k].name
+            tl.time / 60,
+            tl.fatigue[:, k],
+            lw=1.4 if left else 2.0,
+            ls="--" if left else "-",
+            color=colours[groups.index(data_name(name)) % len(colours)],
+            label=name,
         )
+        mirror = name[:-2] + "_r" if left else None
+        others = [j for j in drawn if halves[j].name == mirror]
+        if others and np.allclose(tl.fatigue[:, k], tl.fatigue[:, others[0]], atol=1e-6):
+            same.append(data_name(name))
     over = [e for e in result.events if e.kind == "over_strength"]
     if over:
         ax.plot(
@@ -83,8 +104,8 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
             mew=2,
             label="over strength: exhausted at once",
         )
-    ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=1, label="fatigue threshold")
-    ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=1, label="recovery threshold")
+    ax.axhline(s.fatigue_threshold, color="tab:red", ls=":", lw=1, label="fatigue threshold")
+    ax.axhline(s.recovery_threshold, color="tab:green", ls=":", lw=1, label="recovery threshold")
     active = tl.owner >= 0
     if active.any():
         ax.fill_between(
@@ -94,6 +115,12 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     ax.set_xlabel("time (min)")
     ax.set_ylabel("fatigue level")
     ax.set_title(title(result))
+    below = sum(1 for k in range(len(halves)) if 0 < peak[k] < DRAWN_MIN_FATIGUE)
+    notes = [f"left and right coincide: {', '.join(same)}"] if same else []
+    if below and len(drawn) < len(halves):
+        notes.append(f"{below} more loaded groups stay below 1 % fatigue")
+    if notes:
+        fig.text(0.01, 0.01, "; ".join(notes), fontsize=7, color="0.3")
     if many:
         ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     else:
@@ -257,6 +284,24 @@ def _at_least(ax: plt.Axes, span: float) -> None:
 #: move most.
 DRAWN_ANGLES = 6
 
+#: Motion below which a figure says the joint did not move [deg].
+STILL_DEG = 0.1
+
+
+def _say(ax: plt.Axes, text: str) -> None:
+    """Write ``text`` in the middle of ``ax``: what a degenerate plot does not show."""
+    ax.text(
+        0.5, 0.5, textwrap.fill(text, 48), transform=ax.transAxes, ha="center", va="center",
+        fontsize=9,
+        color="0.25", bbox={"facecolor": "white", "edgecolor": "0.7", "alpha": 0.9},
+    )  # fmt: skip
+
+
+def _level(result: SimulationResult, task: object) -> int:
+    """The index of ``task``'s priority level among the run's levels (the residual column)."""
+    priorities = sorted({t.priority for t in result.tasks})
+    return priorities.index(task.priority)
+
 
 def plot_effector(result: SimulationResult, path: Path) -> Path:
     """The task followed over time (paper Figs 12–14): the effector's position along the
@@ -265,7 +310,8 @@ def plot_effector(result: SimulationResult, path: Path) -> Path:
     at least 1 mm, so that rounding noise does not look like motion."""
     tl = result.timeline
     ordered = sorted(result.tasks, key=lambda t: t.priority)
-    top, line = ordered[0], next((t for t in ordered if isinstance(t, Line)), None)
+    line = next((t for t in ordered if isinstance(t, Line)), None)
+    top = next((t for t in ordered if isinstance(t, Position | Plane)), ordered[0])
     fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
     minutes = tl.time / 60
     if line is not None and tl.along_line is not None:
@@ -273,17 +319,20 @@ def plot_effector(result: SimulationResult, path: Path) -> Path:
         ax.set_ylabel(f"{line.effector} along the line (m)")
         _at_least(ax, 1e-3)
     elif isinstance(top, Position | Plane):
-        ax.plot(minutes, tl.residuals[:, 0], color="tab:blue", lw=1.8)
+        ax.plot(minutes, tl.residuals[:, _level(result, top)], color="tab:blue", lw=1.8)
         kind = "target" if isinstance(top, Position) else "plane"
         ax.set_ylabel(f"{top.effector} to the {kind} (m)")
         _at_least(ax, 1e-3)
     else:
         dofs = result.problem.body.dofs
-        moving = np.argsort(-np.ptp(tl.q, axis=0), kind="stable")[:DRAWN_ANGLES]
+        motion = np.degrees(np.ptp(tl.q, axis=0))
+        moving = np.argsort(-motion, kind="stable")[:DRAWN_ANGLES]
         for i in sorted(moving):
             ax.plot(minutes, np.degrees(tl.q[:, i]), lw=1.8, label=dofs[i].name)
         most = f", the {DRAWN_ANGLES} that move most" if len(dofs) > DRAWN_ANGLES else ""
         ax.set_ylabel(f"joint angle (deg){most}")
+        if motion.max() < STILL_DEG:
+            _say(ax, f"no joint moved more than {STILL_DEG:g}° during the run")
     ax.set_xlabel("time (min)")
     ax.set_title(title(result))
     ax.grid(alpha=0.3)
@@ -331,6 +380,12 @@ def plot_active_torque(result: SimulationResult, path: Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
     ax.set_title(title(result), fontsize=9)
+    if np.ptp(deg[: goal + 1]) < STILL_DEG:
+        _say(
+            ax,
+            f"{body.dofs[j].name} did not move from the initial posture to the "
+            f"{name.split(' (')[0]}: nothing to trace",
+        )
     for k, (step, color, label) in enumerate(
         ((0, "black", "initial"), (goal, "tab:green", name.split(" (")[0]))
     ):
