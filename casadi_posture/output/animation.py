@@ -84,7 +84,14 @@ def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
     on = tl.owner >= 0
     if on.any():
         ax.fill_between(
-            minutes, 0, STRIP_TOP, where=on, color="0.88", step="post", zorder=0, label="constraint on"
+            minutes,
+            0,
+            STRIP_TOP,
+            where=on,
+            color="0.88",
+            step="post",
+            zorder=0,
+            label="constraint on",
         )
     ax.set_xlim(minutes[0], max(minutes[-1], minutes[0] + 1e-3))
     ax.set_ylim(0, STRIP_TOP)  # the legend sits above the curves (fatigue ≤ 1)
