@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import casadi as ca
@@ -33,7 +33,8 @@ from casadi_posture.adjustment.constraint import (
 )
 from casadi_posture.adjustment.reduced_torque import Goal
 from casadi_posture.adjustment.whole_body import WholeBodyAdjustment
-from casadi_posture.biomech.torques import Torques
+from casadi_posture.biomech.fatigue import FatigueModel
+from casadi_posture.biomech.torques import TorqueModel, Torques
 from casadi_posture.body.support import Support
 from casadi_posture.data import parameters
 from casadi_posture.errors import ProblemError
@@ -260,7 +261,76 @@ def simulate(
 
 
 def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> SimulationResult:
-    start = time.perf_counter()
+    """Set the run up, step it until it ends, and gather its result."""
+    started = time.perf_counter()
+    run = _setup(problem, solver)
+    state = _State(run.fatigue.initial_state(), problem.posture.copy())
+    for step in range(problem.spec.simulation.steps):
+        now = step * run.dt
+        if interrupt.requested():
+            state.events.append(Event(now, "interrupted", "", "Ctrl-C: the run stopped here"))
+            state.stop = "interrupted"
+            break
+        if run.schedule is not None and run.schedule.resting(step):
+            _rest_step(run, state, now)
+            continue
+        if _hold_step(run, state, step, now, stop_at_threshold):
+            break
+    return _result(run, state, started)
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What a run builds once, before its loop: the solvers (``kept_solvers`` on the
+    whole-body adjustment's kept levels, None with the paper's), the torque and fatigue
+    models, the constraint, the tracked effector and line, the compiled effector position,
+    the half-joint names, the top level's name, the step [s] and the schedule."""
+
+    problem: Problem
+    solver: str
+    settings: ConstraintSettings
+    hierarchy: TaskHierarchy
+    solvers: _Solvers
+    kept_solvers: _Solvers | None
+    torque_model: TorqueModel
+    fatigue: FatigueModel
+    constraint: FatigueConstraint
+    effector: str
+    line: Line | None
+    position: ca.Function
+    names: list[str]
+    top: str
+    dt: float
+    schedule: Schedule | None
+
+
+@dataclass
+class _State:
+    """What the loop carries from step to step: the fatigue model's state, the posture
+    [rad], its torques and fatigue levels, the last IK answer and inequality, the owner whose
+    ``no_reduction`` was reported, whether level 1 was held, the rows and events so far, why
+    the run stopped, and the solver statistics (IK wall time [s])."""
+
+    fatigue_state: np.ndarray
+    q: np.ndarray
+    torques: Torques | None = None
+    levels: np.ndarray | None = None
+    result: IKResult | None = None
+    before: Inequality | None = None
+    unreduced: int | None = None
+    held: bool = True
+    record: _Recorder = field(default_factory=_Recorder)
+    events: list[Event] = field(default_factory=list)
+    stop: Stop = "completed"
+    ik_time: float = 0.0
+    failures: int = 0
+    fallbacks: int = 0
+    iterations: int = 0
+    reused: int = 0
+
+
+def _setup(problem: Problem, solver: str | None) -> _Setup:
+    """Check the adjustment's settings and build, once, every object the steps use."""
     spec, body = problem.spec, problem.body
     name = solver or spec.solver.name
     hierarchy = problem.hierarchy()
@@ -275,7 +345,7 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
             settings.keep_levels,
             f"at most the number of priority levels ({hierarchy.depth})",
         )
-    whole_body = None
+    whole_body, kept_solvers = None, None
     if settings.adjustment == "whole_body":
         if _effort_comfort(problem) is None:
             raise ProblemError(
@@ -291,132 +361,232 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
         kept_solvers = _Solvers(name, problem, whole_body.kept_hierarchy)
     constraint = FatigueConstraint(body, problem.passive, settings, hierarchy, whole_body)
     effector, line = _tracked(hierarchy)
-    position = ca.Function("effector", [body.q], [body.landmark(effector)])
-    names = [h.name for h in body.half_joints]
-    top = hierarchy.level_names()[0]
+    return _Setup(
+        problem,
+        name,
+        settings,
+        hierarchy,
+        solvers,
+        kept_solvers,
+        torque_model,
+        fatigue,
+        constraint,
+        effector,
+        line,
+        ca.Function("effector", [body.q], [body.landmark(effector)]),
+        [h.name for h in body.half_joints],
+        hierarchy.level_names()[0],
+        spec.simulation.time_step_s,
+        Schedule.of(problem),
+    )
 
-    dt = spec.simulation.time_step_s
-    schedule = Schedule.of(problem)
-    record = _Recorder()
-    events: list[Event] = []
-    state, q, torques, levels = fatigue.initial_state(), problem.posture.copy(), None, None
-    ik_time, failures, fallbacks, iterations, held = 0.0, 0, 0, 0, True
-    result, before, reused, unreduced = None, None, 0, None
-    stop: Stop = "completed"
-    for step in range(spec.simulation.steps):
-        now = step * dt
-        if interrupt.requested():
-            events.append(Event(now, "interrupted", "", "Ctrl-C: the run stopped here"))
-            stop = "interrupted"
-            break
-        if schedule is not None and schedule.resting(step):
-            loads = np.zeros(len(names))
-            state = fatigue.step(state, loads, dt)
-            levels = fatigue.level(state, loads)
-            events += constraint.update(levels, now)
-            record.add(**_row(position, constraint, q, None, loads, levels, None, None))
-            continue
-        was_blocked = constraint.blocked
-        planned = constraint.hyperplane(q, torques, levels) if torques is not None else None
-        inequality, goal = planned if planned is not None else (None, None)
-        if goal is not None and inequality is None and unreduced != constraint.owner:
-            unreduced = constraint.owner
-            events.append(
-                Event(
-                    now,
-                    "no_reduction",
-                    names[constraint.owner],
-                    f"{goal.case}: no posture the constraint could move to carries less; "
-                    "the posture stays",
-                )
+
+def _rest_step(run: _Setup, state: _State, now: float) -> None:
+    """A rest step at ``now`` [s]: no load, every group recovers, the last posture recorded."""
+    loads = np.zeros(len(run.names))
+    state.fatigue_state = run.fatigue.step(state.fatigue_state, loads, run.dt)
+    state.levels = run.fatigue.level(state.fatigue_state, loads)
+    state.events += run.constraint.update(state.levels, now)
+    row = _row(run.position, run.constraint, state.q, None, loads, state.levels, None, None)
+    state.record.add(**row)
+
+
+def _hold_step(run: _Setup, state: _State, step: int, now: float, stop_at_threshold: bool) -> bool:
+    """A hold step at ``now`` [s]: constraint, IK, fatigue, checks, row; True if the run ends."""
+    inequality, goal = _plan_constraint(run, state, now)
+    _solve_ik(run, state, inequality, now)
+    loads, over, changes = _update_fatigue(run, state, step, now)
+    _check_level_one(run, state, step, now)
+    row = _row(
+        run.position,
+        run.constraint,
+        state.q,
+        state.torques,
+        loads,
+        state.levels,
+        state.result,
+        goal,
+    )
+    state.record.add(**row)
+    return _ends(run, state, over, changes, now, stop_at_threshold)
+
+
+def _plan_constraint(
+    run: _Setup, state: _State, now: float
+) -> tuple[Inequality | None, Goal | None]:
+    """The step's constraint (inequality, goal) from the last step, with its events."""
+    constraint, names = run.constraint, run.names
+    was_blocked = constraint.blocked
+    planned = (
+        constraint.hyperplane(state.q, state.torques, state.levels)
+        if state.torques is not None
+        else None
+    )
+    inequality, goal = planned if planned is not None else (None, None)
+    if goal is not None and inequality is None and state.unreduced != constraint.owner:
+        state.unreduced = constraint.owner
+        state.events.append(
+            Event(
+                now,
+                "no_reduction",
+                names[constraint.owner],
+                f"{goal.case}: no posture the constraint could move to carries less; "
+                "the posture stays",
             )
-        if constraint.owner is None:
-            unreduced = None
-        if constraint.blocked and not was_blocked and constraint.owner is not None:
-            events.append(
-                Event(
-                    now,
-                    "constraint_blocked",
-                    names[constraint.owner],
-                    "the goal is not reachable while the kept levels hold",
-                )
+        )
+    if constraint.owner is None:
+        state.unreduced = None
+    if constraint.blocked and not was_blocked and constraint.owner is not None:
+        state.events.append(
+            Event(
+                now,
+                "constraint_blocked",
+                names[constraint.owner],
+                "the goal is not reachable while the kept levels hold",
             )
-        tic = time.perf_counter()
-        unchanged = result is not None and result.success and inequality is None and before is None
-        before = inequality
-        if unchanged:
-            reused += 1
+        )
+    return inequality, goal
+
+
+def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: float) -> None:
+    """The step's posture: the last one when nothing changed, else the IK's (with fallback)."""
+    tic = time.perf_counter()
+    result = state.result
+    unchanged = (
+        result is not None and result.success and inequality is None and state.before is None
+    )
+    state.before = inequality
+    if unchanged:
+        state.reused += 1
+    else:
+        if run.kept_solvers is not None and run.constraint.owner is not None:
+            result, spent, detail = _solve_step(
+                run.kept_solvers, state.q, inequality, retry=state.held
+            )
+            result = replace(result, residuals=run.hierarchy.residual_norms(result.q))
         else:
-            if whole_body is not None and constraint.owner is not None:
-                result, spent, detail = _solve_step(kept_solvers, q, inequality, retry=held)
-                result = replace(result, residuals=hierarchy.residual_norms(result.q))
-            else:
-                result, spent, detail = _solve_step(solvers, q, inequality, retry=held)
-            iterations += spent
-            if detail:
-                events.append(Event(now, "solver_fallback", "", detail))
-                fallbacks += 1
-        ik_time += time.perf_counter() - tic
-        failures += not result.success
-        q = result.q
-        torques = torque_model.evaluate(q)
-        loads = torques.load_pct_mvc
-        if step > 0:
-            state = fatigue.step(state, loads, dt)
-        levels = fatigue.level(state, loads)
-        over = np.flatnonzero(loads > STRENGTH_PCT_MVC)
-        for k in over:
-            events.append(
-                Event(
-                    now,
-                    "over_strength",
-                    names[k],
-                    f"load {loads[k]:.2f} %MVC exceeds the group's strength",
-                )
+            result, spent, detail = _solve_step(run.solvers, state.q, inequality, retry=state.held)
+        state.iterations += spent
+        if detail:
+            state.events.append(Event(now, "solver_fallback", "", detail))
+            state.fallbacks += 1
+    state.ik_time += time.perf_counter() - tic
+    state.failures += not result.success
+    state.result, state.q = result, result.q
+
+
+def _update_fatigue(
+    run: _Setup, state: _State, step: int, now: float
+) -> tuple[np.ndarray, np.ndarray, list[Event]]:
+    """Torques and fatigue at the new posture: the loads [%MVC], groups over strength, events."""
+    state.torques = run.torque_model.evaluate(state.q)
+    loads = state.torques.load_pct_mvc
+    if step > 0:
+        state.fatigue_state = run.fatigue.step(state.fatigue_state, loads, run.dt)
+    levels = run.fatigue.level(state.fatigue_state, loads)
+    over = np.flatnonzero(loads > STRENGTH_PCT_MVC)
+    for k in over:
+        state.events.append(
+            Event(
+                now,
+                "over_strength",
+                run.names[k],
+                f"load {loads[k]:.2f} %MVC exceeds the group's strength",
             )
-        levels[over] = 1.0
-        changes = constraint.update(levels, now)
-        events += changes
-        if not result.achieved[0]:
-            if step == 0:
-                detail = (
-                    f"level 1 not achieved at the start: residual {result.residuals[0]:.3g} "
-                    f"{hierarchy.level_units()[0]} > {ACHIEVED_TOLERANCE:g}; the task is "
-                    "never held"
-                )
-                stop = "never_held"
-            else:
-                detail = f"level-1 residual {result.residuals[0]:.3g}"
-            if held:
-                events.append(Event(now, "task_not_held", top, detail))
-        held = result.achieved[0]
-        record.add(**_row(position, constraint, q, torques, loads, levels, result, goal))
-        if stop == "never_held":
-            break
-        if levels.max() >= 1.0:
-            worst = int(np.argmax(levels))
-            cause = "load above strength" if worst in over else "fatigue reached 1"
-            events.append(
-                Event(
-                    now,
-                    "exhausted",
-                    names[worst],
-                    f"{cause}: the task can no longer be held",
-                )
+        )
+    levels[over] = 1.0
+    state.levels = levels
+    changes = run.constraint.update(levels, now)
+    state.events += changes
+    return loads, over, changes
+
+
+def _check_level_one(run: _Setup, state: _State, step: int, now: float) -> None:
+    """Level 1 after the IK: ``task_not_held`` when lost, ``never_held`` at the start."""
+    result = state.result
+    if not result.achieved[0]:
+        if step == 0:
+            detail = (
+                f"level 1 not achieved at the start: residual {result.residuals[0]:.3g} "
+                f"{run.hierarchy.level_units()[0]} > {ACHIEVED_TOLERANCE:g}; the task is "
+                "never held"
             )
-            stop = "exhausted"
-            break
-        if stop_at_threshold and any(e.kind == "fatigue_threshold" for e in changes):
-            stop = "fatigue_threshold"
-            break
+            state.stop = "never_held"
+        else:
+            detail = f"level-1 residual {result.residuals[0]:.3g}"
+        if state.held:
+            state.events.append(Event(now, "task_not_held", run.top, detail))
+    state.held = result.achieved[0]
+
+
+def _ends(
+    run: _Setup,
+    state: _State,
+    over: np.ndarray,
+    changes: list[Event],
+    now: float,
+    stop_at_threshold: bool,
+) -> bool:
+    """Whether the run ends here: never held, a group exhausted, or (if asked) the threshold."""
+    if state.stop == "never_held":
+        return True
+    levels = state.levels
+    if levels.max() >= 1.0:
+        worst = int(np.argmax(levels))
+        cause = "load above strength" if worst in over else "fatigue reached 1"
+        state.events.append(
+            Event(
+                now,
+                "exhausted",
+                run.names[worst],
+                f"{cause}: the task can no longer be held",
+            )
+        )
+        state.stop = "exhausted"
+        return True
+    if stop_at_threshold and any(e.kind == "fatigue_threshold" for e in changes):
+        state.stop = "fatigue_threshold"
+        return True
+    return False
+
+
+def _result(run: _Setup, state: _State, started: float) -> SimulationResult:
+    """The run's result, with the wall time [s] since ``started`` (``time.perf_counter``)."""
+    hierarchy, spec = run.hierarchy, run.problem.spec
+    timeline = _timeline(run, state.record)
+    return SimulationResult(
+        run.problem,
+        run.solver,
+        run.settings,
+        run.effector,
+        tuple(t for level in hierarchy.levels for t in level),
+        tuple(hierarchy.level_names()),
+        tuple(hierarchy.level_units()),
+        timeline,
+        state.events,
+        state.stop,
+        spec.simulation.duration_s,
+        time.perf_counter() - started,
+        state.ik_time,
+        state.failures,
+        state.fallbacks,
+        state.iterations,
+        state.reused,
+        run.schedule,
+    )
+
+
+def _timeline(run: _Setup, record: _Recorder) -> Timeline:
+    """The recorded rows as the timeline's arrays, the distance along the line [m], balance."""
+    body, names = run.problem.body, run.names
     count = len(record.rows.get("q", []))
     effector_path = record.array("effector") if count else np.zeros((0, 3))
     along = None
-    if line is not None:
-        direction = np.asarray(line.direction) / np.linalg.norm(line.direction)
-        along = (effector_path - np.asarray(line.point)) @ direction
-    timeline = Timeline(
-        np.arange(count) * dt,
+    if run.line is not None:
+        direction = np.asarray(run.line.direction) / np.linalg.norm(run.line.direction)
+        along = (effector_path - np.asarray(run.line.point)) @ direction
+    return Timeline(
+        np.arange(count) * run.dt,
         _rows(record, "q", count, body.n),
         effector_path,
         along,
@@ -434,30 +604,10 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
             )
         ),
         list(record.rows.get("case", [])),
-        _rows(record, "residuals", count, hierarchy.depth),
+        _rows(record, "residuals", count, run.hierarchy.depth),
         list(record.rows.get("solver", [])),
         list(record.rows.get("phase", [])),
-        _balance(problem, _rows(record, "q", count, body.n)) if count else None,
-    )
-    return SimulationResult(
-        problem,
-        name,
-        settings,
-        effector,
-        tuple(t for level in hierarchy.levels for t in level),
-        tuple(hierarchy.level_names()),
-        tuple(hierarchy.level_units()),
-        timeline,
-        events,
-        stop,
-        spec.simulation.duration_s,
-        time.perf_counter() - start,
-        ik_time,
-        failures,
-        fallbacks,
-        iterations,
-        reused,
-        schedule,
+        _balance(run.problem, _rows(record, "q", count, body.n)) if count else None,
     )
 
 

@@ -19,7 +19,8 @@ from conftest import PROBLEMS
 from casadi_posture import static
 from casadi_posture.biomech.low_back import LowBackModel
 from casadi_posture.cli import main
-from casadi_posture.design import Design, _measures, design
+from casadi_posture.design import Design, design
+from casadi_posture.design.nlp import _measures
 from casadi_posture.problem import load_problem
 
 SHELF = PROBLEMS / "standing_shelf_box.toml"

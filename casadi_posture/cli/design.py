@@ -12,7 +12,10 @@ import numpy as np
 from casadi_posture import api
 from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.cli.common import FORCE_OPTION, SET_OPTION, emit_json, main, problem_from
-from casadi_posture.design import OBJECTIVES, Design, Score, design, parse_free, sweep
+from casadi_posture.design.answer import Design, sweep
+from casadi_posture.design.objectives import OBJECTIVES, Score
+from casadi_posture.design.quantities import parse_free
+from casadi_posture.design.solve import design
 from casadi_posture.output.design_plots import (
     SWEEP_POINTS,
     plot_compression,

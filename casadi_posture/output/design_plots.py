@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from casadi_posture.biomech.low_back import limits as compression_limits
-from casadi_posture.design import Design, SweepPoint
+from casadi_posture.design.answer import Design, SweepPoint
 from casadi_posture.output.axes import axis_label, with_unit
 from casadi_posture.output.saving import save_figure
 
