@@ -10,7 +10,8 @@ TEST_WORKERS ?= auto
 
 # One stamp per install: the demo needs the package and pandas (the README's Python
 # example makes DataFrames); the tests add pinocchio,
-# pytest-xdist, hypothesis, pandas, pyarrow and dask; lint and the benchmarks add ruff.
+# pytest-xdist, hypothesis, playwright (report.html in Debian's Chromium, which .ci/run
+# installs), pandas, pyarrow and dask; lint and the benchmarks add ruff.
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip

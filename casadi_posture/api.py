@@ -28,6 +28,7 @@ from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.axes import axis_keys, axis_label
+from casadi_posture.output.html_report import write_report
 from casadi_posture.output.plain import plain
 from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
 from casadi_posture.output.results import (
@@ -164,13 +165,17 @@ class Simulation:
         """The events as a pandas DataFrame, the columns of events.csv."""
         return frame(event_columns(self.result))
 
-    def write(self, out: str | Path, *, figures: bool = True, force: bool = False) -> list[Path]:
-        """Write the run's files (and figures) into ``out``: a new or empty folder, or any
-        folder with ``force``."""
+    def write(
+        self, out: str | Path, *, figures: bool = True, report: bool = True, force: bool = False
+    ) -> list[Path]:
+        """Write the run's files (and figures, and report.html: the run in a browser) into
+        ``out``: a new or empty folder, or any folder with ``force``."""
         out = Path(out)
         check_out(out, force=force, key="out")
         written = write_results(self.result, out)
-        return written + (plot_simulation(self.result, out) if figures else [])
+        written += plot_simulation(self.result, out) if figures else []
+        page = write_report(self.result, out / "report.html") if report else None
+        return written + ([page] if page else [])
 
     def animate(self, path: str | Path, *, force: bool = False) -> Path | None:
         """Animate the run into ``path``: .gif (always) or .mp4 (with ffmpeg on the PATH); a

@@ -24,6 +24,7 @@ from casadi_posture.cli.common import (
 )
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.animation import WRITERS, check_format
+from casadi_posture.output.html_report import write_report
 from casadi_posture.output.low_back import run_lines as low_back_lines
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
@@ -65,6 +66,13 @@ from casadi_posture.static import law
     help="Also write animation.gif (or, --animate mp4, animation.mp4: needs ffmpeg) of the "
     "stick figure over the run. Put it after PROBLEM or write --animate=gif.",
 )
+@click.option(
+    "--no-report",
+    "no_report",
+    is_flag=True,
+    help="Do not write report.html (the run in one page for a browser: the body in 3-D "
+    "with a time slider, the curves, the summary).",
+)
 @SET_OPTION
 @FORCE_OPTION
 def simulate(
@@ -75,13 +83,16 @@ def simulate(
     duration: float | None,
     out: Path | None,
     animate: str | None,
+    no_report: bool,
     sets: tuple[str, ...],
     force: bool,
 ) -> None:
     """Simulate holding the tasks over time: fatigue, the fatigue-reducing constraint with
     its hysteresis, recovery. Writes timeline.csv (and .parquet), events.csv,
-    summary.json, manifest.json and figures into the output folder, which must be new or
-    empty (or --force); `casadi-posture rerun OUT/manifest.json` repeats the run.
+    summary.json, manifest.json, figures and report.html (one page that opens offline in
+    a browser: the body in 3-D with a time slider, the curves and the summary; not with
+    --no-report) into the output folder, which must be new or empty (or --force);
+    `casadi-posture rerun OUT/manifest.json` repeats the run.
 
     The run ends at its duration, when a muscle group is exhausted (fatigue 1, or a load
     above its strength), or at once when level 1 cannot be achieved at the start. Exit
@@ -112,7 +123,7 @@ def simulate(
         )
         api.check_out(out, force=force)
         run = api.simulate(resolved, solver)
-        files = _write(run, out, command_line())
+        files = _write(run, out, command_line(), report=not no_report)
         if animate is not None:
             drawn = run.animate(out / f"animation.{animate}", force=True)
             files += [drawn] if drawn else []
@@ -178,9 +189,26 @@ def _manifest(path: Path) -> dict[str, Any]:
     return record
 
 
-def _write(run: api.Simulation, out: Path, command: list[str]) -> list[Path]:
+def _write(
+    run: api.Simulation, out: Path, command: list[str], *, report: bool = True
+) -> list[Path]:
+    """The run's files, figures and (with ``report``) report.html; a report that cannot be
+    written is said on stderr and the run's other files are kept."""
     files = write_results(run.result, out, command=command)
-    return files + plot_simulation(run.result, out)
+    files += plot_simulation(run.result, out)
+    if not report:
+        return files
+    try:
+        page = write_report(run.result, out / "report.html")
+    except KeyboardInterrupt:  # a second Ctrl-C while the page was written
+        page, why = None, "Ctrl-C"
+    except Exception as error:  # the page is an extra: never lose the run over it
+        page, why = None, f"{type(error).__name__}: {error}"
+    else:
+        why = "no step was run"
+    if page is None:
+        click.echo(f"report.html: not written ({why})", err=True)
+    return files + ([page] if page else [])
 
 
 def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:

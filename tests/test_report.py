@@ -1,0 +1,219 @@
+"""report.html: written beside a run's files (not with --no-report), within its size bound,
+and working in a real browser (Debian's headless Chromium driven by Playwright): no
+console error, the slider moves the body to the postures the run computed, the page is
+drawn."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from casadi_posture import api, interrupt
+from casadi_posture.cli import main
+from casadi_posture.output.html_report import (
+    frame_steps,
+    placements,
+    rounded,
+    shown_groups,
+    write_report,
+)
+from casadi_posture.output.scene import Scene
+from casadi_posture.output.skeleton import Skeleton
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+CHROMIUM = Path("/usr/bin/chromium")
+
+#: The standing wall hold for 120 s: the right shoulder flexors reach the fatigue
+#: threshold at 80 s and the constraint takes over (two events), so the posture moves.
+STANDING = {"simulation.duration_s": 120.0}
+
+
+@pytest.fixture(scope="module")
+def standing(tmp_path_factory: pytest.TempPathFactory):
+    out = tmp_path_factory.mktemp("standing")
+    run = api.simulate(api.load(PROBLEMS / "standing_wall_horizontal.toml", STANDING))
+    files = run.write(out, figures=False)
+    return run, out, files
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not CHROMIUM.exists():
+        if os.environ.get("CI"):
+            pytest.fail(f"{CHROMIUM} is missing: .ci/run installs it (apt-get install chromium)")
+        pytest.skip(f"no {CHROMIUM} (apt-get install chromium)")
+    sync_playwright = pytest.importorskip("playwright.sync_api").sync_playwright
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=str(CHROMIUM))
+        yield chromium
+        chromium.close()
+
+
+def _open(browser, path: Path):
+    """The report in a new page, drawn; and the list its console errors go to."""
+    page = browser.new_page(viewport={"width": 1400, "height": 1200})
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(path.resolve().as_uri())
+    page.wait_for_function("window.reportReady === true", timeout=60_000)
+    return page, errors
+
+
+def _mesh(page) -> dict[str, np.ndarray]:
+    """The body's surfaces as drawn: vertices (n × 3 [m]) by trace name."""
+    traces = page.evaluate(
+        "document.getElementById('body').data.filter(t => t.type === 'mesh3d')"
+        ".map(t => [t.name, t.x, t.y, t.z])"
+    )
+    return {name: np.c_[x, y, z] for name, x, y, z in traces if name != "floor" and len(x) > 4}
+
+
+def test_the_report_is_written_beside_the_run_s_files(standing) -> None:
+    _, out, files = standing
+    assert out / "report.html" in files and (out / "report.html").stat().st_size > 1e6
+    assert not list(out.glob("*.partial"))
+
+
+def test_the_slider_shows_every_event_and_at_most_the_limit_besides() -> None:
+    time_s = np.arange(0.0, 1201.0)
+    events = [80.0, 80.0, 365.5, 1199.0]
+    steps = frame_steps(time_s, events, limit=50)
+    assert steps[0] == 0 and steps[-1] == 1200 and np.all(np.diff(steps) > 0)
+    assert {80, 366, 1199} <= set(steps.tolist()) and len(steps) <= 50 + 3
+    assert len(frame_steps(time_s[:20], [], limit=300)) == 20
+
+
+def test_numbers_keep_four_significant_digits() -> None:
+    assert rounded([1234.5678, 0.000123456, -2.0, float("nan")]) == [1235.0, 0.0001235, -2.0, None]
+
+
+def test_the_curves_show_the_groups_that_tire_most(standing) -> None:
+    run, _, _ = standing
+    tl, halves = run.result.timeline, [h.name for h in run.result.problem.body.half_joints]
+    shown = shown_groups(run.result)
+    assert len(shown) == 8 and halves[shown[0]] == "shoulder_flexors_r"
+    peaks = tl.fatigue.max(axis=0)
+    assert peaks[shown].min() >= np.sort(peaks)[-8]  # no group left out tires more
+
+
+def test_the_placements_move_the_mannequin_where_the_skeleton_puts_it(standing) -> None:
+    """The page moves each part by its frame's placement (t + R·x0); at a step after the
+    posture changed this gives the skeleton's own solids (output/skeleton.py)."""
+    run, _, _ = standing
+    result = run.result
+    skeleton = Skeleton(result.problem.body, result.timeline.q)
+    frames = list(dict.fromkeys(part.dof for part in skeleton.parts))
+    step = result.timeline.time.size - 1
+    placed = placements(result, frames, np.array([0, step]))[1]
+    for part, solid in zip(skeleton.parts, skeleton.solids(step), strict=True):
+        t, rotation = placed[frames.index(part.dof), :, 0], placed[frames.index(part.dof), :, 1:]
+        np.testing.assert_allclose(t + part.points() @ rotation.T, solid, atol=1e-12)
+
+
+def test_the_report_works_in_a_browser(standing, browser, tmp_path: Path) -> None:
+    run, out, _ = standing
+    result = run.result
+    page, errors = _open(browser, out / "report.html")
+    data = json.loads(page.inner_text("#report-data"))
+    last = len(data["time"]) - 1
+    first = _mesh(page)
+    before = page.locator("#body").screenshot()
+    page.locator("#slider").fill(str(last))  # as a user drags it: an input event
+    page.wait_for_function(f"window.reportFrame === {last}")
+    moved = _mesh(page)
+    assert not errors, errors
+    # The body drawn at the last moment is the run's last posture (to the page's rounding).
+    step = int(np.searchsorted(result.timeline.time, data["time"][last]))
+    assert step == result.timeline.time.size - 1
+    scene = Scene(result, [step])
+    solids = scene.skeleton.solids(step)
+    for name, task in (("body", False), ("task limbs", True)):
+        expected = [
+            solid.reshape(-1, 3)
+            for part, solid in zip(scene.skeleton.parts, solids, strict=True)
+            if not part.context and (part.limb in scene.task_limbs) == task
+        ]
+        np.testing.assert_allclose(moved[name], np.vstack(expected), atol=2e-3)
+    assert np.abs(moved["task limbs"] - first["task limbs"]).max() > 0.05  # the arm moved
+    # The cursor on the curves follows: at the last moment's time.
+    cursor = page.evaluate("document.getElementById('curves').layout.shapes.at(-1).x0")
+    assert cursor == pytest.approx(data["time"][last] / data["scale"])
+    assert page.inner_text("#clock").startswith(f"t = {data['time'][last]:g} s")
+    after = page.locator("#body").screenshot()
+    pixels = [_pixels(shot) for shot in (before, after)]
+    for image in pixels:
+        assert image.std() > 20  # not blank
+        blue = image[..., 2].astype(int) - image[..., 0] > 40  # the body, not the grey box
+        assert blue.mean() > 0.01
+    assert np.abs(pixels[0].astype(int) - pixels[1]).max() > 100  # the body moved on screen
+    page.screenshot(path=str(tmp_path / "report.png"), full_page=True)
+    page.close()
+
+
+def _pixels(png: bytes) -> np.ndarray:
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+
+def test_a_planar_arm_is_drawn_in_its_plane(browser, tmp_path: Path) -> None:
+    run = api.simulate(api.load(PROBLEMS / "holding_m45.toml", {"simulation.duration_s": 60.0}))
+    path = write_report(run.result, tmp_path / "report.html")
+    page, errors = _open(browser, path)
+    kinds = page.evaluate("document.getElementById('body').data.map(t => t.type)")
+    assert set(kinds) == {"scatter"} and not errors, (kinds, errors)
+    body = page.evaluate("document.getElementById('body').data.find(t => t.name === 'body')")
+    tl = run.result.timeline
+    skeleton = Skeleton(run.result.problem.body, tl.q)
+    i, j = skeleton.plane
+    bones = skeleton.segments(0)
+    drawn = np.array([[np.nan if v is None else v for v in body[a]] for a in "xy"]).T
+    np.testing.assert_allclose(drawn, bones[:, [i, j]], atol=1e-3)
+    page.close()
+
+
+def test_no_report_writes_none(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    args = ["simulate", str(PROBLEMS / "holding_m45.toml"), "--duration", "20", "--no-report"]
+    result = CliRunner().invoke(main, [*args, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert (out / "summary.json").exists() and not (out / "report.html").exists()
+    assert "report.html" not in result.output
+
+
+def test_an_interrupted_run_gets_a_report_of_its_steps(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    calls = iter(range(10**6))
+    monkeypatch.setattr(interrupt, "requested", lambda: next(calls) >= 15)
+    out = tmp_path / "run"
+    args = ["simulate", str(PROBLEMS / "holding_m45.toml"), "--out", str(out)]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 130, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["stop"] == "interrupted"
+    page = (out / "report.html").read_text()
+    assert "FLAGGED: interrupted at" in page
+    data = json.loads(re.search(r'id="report-data"[^>]*>(.*?)</script>', page, re.S).group(1))
+    assert data["time"][-1] == summary["simulated_s"] < 20
+
+
+@pytest.mark.slow
+def test_a_20_minute_standing_report_is_under_5_mb(tmp_path: Path) -> None:
+    """The 29-DOF body at the wall with 1 kg for 20 min: 1201 steps, three cycles."""
+    sets = {"simulation.duration_s": 1200.0, "loads[0].mass_kg": 1.0}
+    run = api.simulate(api.load(PROBLEMS / "standing_wall_horizontal.toml", sets))
+    assert run.result.timeline.time.size == 1201 and run.summary()["fatigue_recovery_cycles"] >= 3
+    start = time.perf_counter()
+    path = write_report(run.result, tmp_path / "report.html")
+    took = time.perf_counter() - start
+    assert path.stat().st_size < 5e6 and took < 30, (path.stat().st_size, took)
