@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
@@ -314,3 +315,34 @@ def test_a_3d_table_shows_the_most_loaded_groups_and_all_with_the_flag(command: 
     assert "more half-joints" not in every
     arm = run(command, str(PROBLEMS / "holding_m45.toml")).stdout
     assert "more half-joints" not in arm and "elbow_extensors" in arm
+
+
+def test_simulate_names_the_joints_that_moved_and_the_groups_that_matter(tmp_path: Path) -> None:
+    """A 3-D run's table shows the ten groups of largest load or fatigue, its recovery line
+    the joints that moved most (their start and recovery angles, as summary.json records),
+    and the times in seconds and minutes; --all shows every group and joint."""
+    path = str(PROBLEMS / "standing_wall_horizontal.toml")
+    out = tmp_path / "run"
+    text = run("simulate", path, "--duration", "400", "--no-report", "--out", str(out)).stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert "... 48 more half-joints" in text
+    assert "first at the fatigue threshold: shoulder_flexors_r (shoulder) at 80 s (1.3 min)" in text
+    recovery = summary["recovery_postures"][0]
+    line = next(x for x in text.splitlines() if x.strip().startswith("recovered at"))
+    assert line.strip().startswith(f"recovered at {recovery['time_s']:g} s (")
+    named = [part.split()[0] for part in line.split(": ", 1)[1].split(", ")[:-1]]
+    angles = recovery["posture_deg"]
+    timeline = np.loadtxt(out / "timeline.csv", delimiter=",", skiprows=1, max_rows=1, dtype=str)
+    header = (out / "timeline.csv").read_text().splitlines()[0].split(",")
+    start = {k: float(timeline[header.index(f"{k}_deg")]) for k in angles}
+    moved = sorted(angles, key=lambda k: -abs(angles[k] - start[k]))
+    assert named == moved[: len(named)] and 1 <= len(named) <= 4
+    assert f"{named[0]} {start[named[0]]:.1f} → {angles[named[0]]:.1f}°" in line
+    assert line.endswith(
+        f"{len(angles) - len(named)} other joints within "
+        f"{abs(angles[moved[len(named)]] - start[moved[len(named)]]):.1f}°"
+    )
+    every = run(
+        "simulate", path, "--duration", "400", "--no-report", "--all", "--out", str(tmp_path / "b")
+    ).stdout
+    assert "more half-joints" not in every and "other joints within" not in every

@@ -8,9 +8,11 @@ from pathlib import Path
 from typing import Any
 
 import click
+import numpy as np
 
 from casadi_posture import api, interrupt
 from casadi_posture.cli.common import (
+    ALL_OPTION,
     FORCE_OPTION,
     INTERRUPTED,
     SET_OPTION,
@@ -21,6 +23,7 @@ from casadi_posture.cli.common import (
     main,
     parse_sets,
     problem_from,
+    shown_groups,
 )
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.animation import WRITERS, check_format
@@ -73,6 +76,7 @@ from casadi_posture.static import law
     help="Do not write report.html (the run in one page for a browser: the body in 3-D "
     "with a time slider, the curves, the summary).",
 )
+@ALL_OPTION
 @SET_OPTION
 @FORCE_OPTION
 def simulate(
@@ -84,6 +88,7 @@ def simulate(
     out: Path | None,
     animate: str | None,
     no_report: bool,
+    show_all: bool,
     sets: tuple[str, ...],
     force: bool,
 ) -> None:
@@ -130,7 +135,7 @@ def simulate(
             if drawn is None:
                 why = "Ctrl-C" if interrupt.requested() else "no step was run"
                 click.echo(f"animation: not written ({why})", err=True)
-    raise SystemExit(_report(run, files, law(resolved)))
+    raise SystemExit(_report(run, files, law(resolved), show_all))
 
 
 @main.command()
@@ -211,8 +216,11 @@ def _write(
     return files + ([page] if page else [])
 
 
-def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
-    """Print what simulate and rerun show; their exit code."""
+def _report(
+    run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool = False
+) -> int:
+    """Print what simulate and rerun show (on a large body the most loaded half-joints,
+    unless ``show_all``); their exit code."""
     result = run.result
     problem = str(result.problem.path)
     report = run.summary()
@@ -227,6 +235,12 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
     echo_free_dofs(result.problem)
     click.echo(f"recovery law: {recovery_law}")
     click.echo(f"endurance rule: {report['endurance_rule']}\n")
+    groups = report["half_joints"]
+    keep = shown_groups(
+        [max(g["initial_load_pct_mvc"], 100 * g["max_fatigue"]) for g in groups],
+        [g["initial_verdict"] == "over strength" for g in groups],
+        show_all,
+    )
     click.echo(
         table(
             [
@@ -246,19 +260,31 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str) -> int:
                     g["first_fatigue_threshold_s"],
                     g["max_fatigue"],
                 ]
-                for g in report["half_joints"]
+                for g in (groups[k] for k in keep)
             ],
             digits=2,
         )
     )
+    hidden = [groups[k] for k in range(len(groups)) if k not in keep]
+    if hidden:
+        load = max(g["initial_load_pct_mvc"] for g in hidden)
+        tired = max(g["max_fatigue"] for g in hidden)
+        click.echo(
+            f"... {len(hidden)} more half-joints start at most at {load:.1f} %MVC and reach at "
+            f"most {tired:.2f} fatigue; --all prints every row"
+        )
     click.echo()
     for line in outcome_lines(report):
         click.echo(line)
     recoveries = report["recovery_postures"]
+    names, first = result.problem.body.dof_names, np.degrees(result.timeline.q[0])
+    start = {name: float(angle) for name, angle in zip(names, first, strict=True)}
     for rec in recoveries[:SHOWN_RECOVERIES]:
-        posture = ", ".join(f"{k} {v:.1f}°" for k, v in rec["posture_deg"].items())
         rest = " (during a rest: the last held posture)" if rec.get("phase") == "rest" else ""
-        click.echo(f"  recovered at {rec['time_s']:g} s{rest}: {posture}")
+        click.echo(
+            f"  recovered at {_time(rec['time_s'])}{rest}: "
+            f"{moved(start, rec['posture_deg'], show_all)}"
+        )
     if len(recoveries) > SHOWN_RECOVERIES:
         click.echo(f"  ... and {len(recoveries) - SHOWN_RECOVERIES} more in summary.json")
     plausible = report["plausibility"]
@@ -286,6 +312,32 @@ def _minutes(value: float | None, verdict: str | None) -> float | None:
     return math.inf if value is None and verdict is not None else value
 
 
+#: Joints a recovery line names (those that moved most from the start).
+SHOWN_MOVES = 4
+#: A joint that moved less than this from the start is not named [deg].
+MOVED_DEG = 1.0
+
+
+def moved(start: dict[str, float], posture: dict[str, float], show_all: bool = False) -> str:
+    """The joints of ``posture`` [deg] that moved most from ``start`` [deg], as
+    'shoulder_flexion_r 18.8 → -28.9°' (every joint with ``show_all``), and how many others
+    stayed within :data:`MOVED_DEG`."""
+    change = {k: posture[k] - start[k] for k in posture}
+    ranked = sorted(change, key=lambda k: -abs(change[k]))
+    named = ranked if show_all else [k for k in ranked[:SHOWN_MOVES] if abs(change[k]) >= MOVED_DEG]
+    parts = [f"{k} {start[k]:.1f} → {posture[k]:.1f}°" for k in named]
+    rest = len(posture) - len(named)
+    if rest and not show_all:
+        largest = max((abs(change[k]) for k in ranked[len(named) :]), default=0.0)
+        parts.append(f"{rest} other joints within {max(largest, 0.0):.1f}°")
+    return ", ".join(parts) if parts else "the start posture"
+
+
+def _time(seconds: float) -> str:
+    """A time in seconds, and in minutes from one minute on (as the figures' axes)."""
+    return f"{seconds:g} s ({seconds / 60:.1f} min)" if seconds >= 60 else f"{seconds:g} s"
+
+
 def outcome_lines(report: dict[str, Any]) -> list[str]:
     """The outcome of a simulation in words: limiting group, first to tire, cycles, task."""
     limiting, first = report["limiting_group_at_start"], report["first_to_fatigue"]
@@ -299,13 +351,13 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
         ),
         "first at the fatigue threshold: "
         + (
-            f"{first['half_joint']} ({first['region']}) at {first['time_s']:g} s"
+            f"{first['half_joint']} ({first['region']}) at {_time(first['time_s'])}"
             if first
             else "none"
         ),
         "exhausted: "
         + (
-            f"{exhausted['half_joint']} ({exhausted['region']}) at {exhausted['time_s']:g} s"
+            f"{exhausted['half_joint']} ({exhausted['region']}) at {_time(exhausted['time_s'])}"
             f" ({exhausted['cause']})"
             if exhausted
             else "none"
@@ -316,9 +368,9 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
     elif not task["held_at_start"]:
         lines.append(f"task never held: {task['lost']['reason'] if task['lost'] else 'no step'}")
     elif task["lost"]:
-        lines.append(f"task held {task['held_s']:g} s, then lost: {task['lost']['reason']}")
+        lines.append(f"task held {_time(task['held_s'])}, then lost: {task['lost']['reason']}")
     else:
-        lines.append(f"task held ≥ {task['held_s']:g} s (to the end of the run)")
+        lines.append(f"task held ≥ {_time(task['held_s'])} (to the end of the run)")
     lines.append(f"fatigue/recovery cycles: {report['fatigue_recovery_cycles']}")
     if report.get("schedule"):
         s = report["schedule"]
