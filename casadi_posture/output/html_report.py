@@ -30,6 +30,7 @@ from matplotlib.colors import to_hex
 from plotly.offline import get_plotlyjs
 from plotly.subplots import make_subplots
 
+from casadi_posture.biomech.low_back import limits as back_limits
 from casadi_posture.output.key_postures import title
 from casadi_posture.output.low_back import run_lines as back_lines
 from casadi_posture.output.low_back import step_low_back
@@ -66,9 +67,6 @@ MARKS = {
 #: Height [m] above the floor of what is drawn on it (the support polygon, the centre of
 #: mass's projection): on the floor itself, the floor would hide it.
 LIFT = 0.003
-
-#: NIOSH's design limit of the L5/S1 compression [N].
-NIOSH_N = 3400.0
 
 
 def rounded(values: Any, digits: int = DIGITS) -> Any:
@@ -357,14 +355,15 @@ def _curves_figure(
                        name="compression", line={"color": "#8c564b"}),
             row, 1,
         )  # fmt: skip
-        fig.add_hline(y=NIOSH_N, line={"dash": "dash", "color": "#d62728", "width": 1}, row=row)
+        design = back_limits()["design"]
+        fig.add_hline(y=design, line={"dash": "dash", "color": "#d62728", "width": 1}, row=row)
         fig.add_annotation(
-            text=f"NIOSH design limit {NIOSH_N:g} N", x=1, xref="x domain", y=NIOSH_N,
+            text=f"NIOSH design limit {design:g} N", x=1, xref="x domain", y=design,
             yref=f"y{row}", showarrow=False, xanchor="right", yanchor="bottom",
             font={"size": 9, "color": "#d62728"},
         )  # fmt: skip
         peak = float(np.nanmax(back.compression)) if np.isfinite(back.compression).any() else 0.0
-        fig.update_yaxes(range=[0, 1.1 * max(peak, NIOSH_N)], row=row, col=1)
+        fig.update_yaxes(range=[0, 1.1 * max(peak, design)], row=row, col=1)
         row += 1
     if scores:
         for name, values in scores.items():
