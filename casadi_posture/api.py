@@ -47,6 +47,7 @@ from casadi_posture.problem import (
 )
 from casadi_posture.runs import compare as comparison
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
+from casadi_posture.runs.grid_report import PAGE, write_grid_report
 from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
 from casadi_posture.runs.whatif_plots import plot_outcomes
 from casadi_posture.simulation import SimulationResult
@@ -214,6 +215,7 @@ def whatif(
     max_cases: int = MAX_CASES,
     overrides: Mapping[str, Any] | None = None,
     figures: bool = True,
+    report: bool = True,
     quiet: bool = True,
 ) -> BatchReport:
     """A what-if study: the problem with each combination of the ``vary`` values (a full
@@ -222,7 +224,8 @@ def whatif(
     ``"KEY1,KEY2"`` ties keys of one unit to one value per case (both hands' heights) and
     counts as one axis. ``report.to_frame()`` is the table (also ``whatif.csv``);
     ``report.figures`` draw each answer against the first axis, one line per value of the
-    others.
+    others; with ``report`` each simulated case gets its report.html and ``out`` one page
+    of the grid (report.html: the table, sortable, and the figures).
 
     ``problem`` is a file, or a :class:`Problem` loaded from one (its overrides are kept):
     every case is rebuilt from the file where it runs. With ``jobs`` > 1 a script must
@@ -240,20 +243,24 @@ def whatif(
         paired=paired,
         base=given,
     )
+    cases = [replace(case, report=report) for case in cases]
     described = describe_grid(path, varies, solver=solver, simulate=not static)
     described |= {"paired": paired, "overrides": given}
     out = Path(out)
     prepare_runs(out, resume=resume, force=force, inputs=[path], outputs=WHATIF_OUTPUTS)
-    report = run_batch(
+    answer = run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
     )
-    shutil.copyfile(report.summary, out / "whatif.csv")
-    if not figures:
-        return report
-    data = load_problem(path, given).data
-    labels = {axis: axis_label(data, axis) for axis, _ in varies}
-    drawn = plot_outcomes(report.rows, varies, labels, out, simulate=not static, paired=paired)
-    return replace(report, figures=tuple(drawn))
+    shutil.copyfile(answer.summary, out / "whatif.csv")
+    if figures:
+        data = load_problem(path, given).data
+        labels = {axis: axis_label(data, axis) for axis, _ in varies}
+        drawn = plot_outcomes(answer.rows, varies, labels, out, simulate=not static, paired=paired)
+        answer = replace(answer, figures=tuple(drawn))
+    if report:
+        keys = ", ".join(axis for axis, _ in varies)
+        write_grid_report(answer, out, f"What if: {path} with {keys} varied", answer.figures)
+    return answer
 
 
 def batch(
@@ -266,20 +273,27 @@ def batch(
     resume: bool = False,
     force: bool = False,
     overrides: Mapping[str, Any] | None = None,
+    report: bool = True,
     quiet: bool = True,
 ) -> BatchReport:
     """Simulate many problem files (a file, a folder of ``*.toml`` files, or a list of
-    both) into ``out``; ``overrides`` apply to every file. With ``jobs`` > 1 a script
-    must start its work under ``if __name__ == "__main__":``."""
+    both) into ``out``; ``overrides`` apply to every file; with ``report`` each case gets
+    its report.html and ``out`` a page of every case's row (report.html). With ``jobs`` > 1
+    a script must start its work under ``if __name__ == "__main__":``."""
     paths = [str(problems)] if isinstance(problems, str | Path) else [str(p) for p in problems]
     given = dict(overrides or {})
-    cases = [replace(case, overrides=given) for case in cases_from_paths(paths, solver)]
+    cases = [
+        replace(case, overrides=given, report=report) for case in cases_from_paths(paths, solver)
+    ]
     out = Path(out)
-    prepare_runs(out, resume=resume, force=force, inputs=[case.problem for case in cases])
+    prepare_runs(out, resume=resume, force=force, inputs=[c.problem for c in cases], outputs=[PAGE])
     described = {"kind": "batch", "problems": paths, "solver": solver, "overrides": given}
-    return run_batch(
+    answer = run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
     )
+    if report:
+        write_grid_report(answer, out, f"Batch: {', '.join(paths)}")
+    return answer
 
 
 def _problem_file(

@@ -11,6 +11,7 @@ import os
 import re
 import time
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 import pytest
@@ -217,3 +218,70 @@ def test_a_20_minute_standing_report_is_under_5_mb(tmp_path: Path) -> None:
     path = write_report(run.result, tmp_path / "report.html")
     took = time.perf_counter() - start
     assert path.stat().st_size < 5e6 and took < 30, (path.stat().st_size, took)
+
+
+@pytest.fixture(scope="module")
+def grid(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A what-if of three loads on the arm, 60 s each: its page and each case's report."""
+    out = tmp_path_factory.mktemp("grid") / "w"
+    api.whatif(
+        PROBLEMS / "holding_m45.toml",
+        {"loads[0].mass_kg": [1.0, 2.5, 4.0]},
+        out,
+        overrides={"simulation.duration_s": 60.0},
+    )
+    return out
+
+
+def test_a_what_if_page_links_every_case_to_its_own_report(grid: Path) -> None:
+    """One row per case with the varied value, linked to the case's report.html (which
+    exists), the columns the cases share listed once above the table, the figures
+    embedded."""
+    text = (grid / "report.html").read_text()
+    links = re.findall(r'<a href="([^"]+)">', text)
+    assert len(links) == len(list((grid / "cases").iterdir())) == 3
+    assert all((grid / unquote(link)).exists() for link in links)
+    assert "The same for every case" in text and "<th>loads[0].mass_kg</th>" in text
+    assert text.count("data:image/png;base64,") == len(list(grid.glob("whatif_*.png"))) > 0
+
+
+def test_the_what_if_page_sorts_by_a_column_in_the_browser(grid: Path, browser) -> None:
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto((grid / "report.html").resolve().as_uri())
+    column = "loads[0].mass_kg"
+    values = lambda: page.evaluate(  # noqa: E731
+        "(c) => { const i = [...document.querySelectorAll('#grid th')].findIndex("
+        "h => h.textContent.replace(/ [▲▼]$/, '') === c);"
+        " return [...document.querySelectorAll('#grid tbody tr')]"
+        ".map(r => r.cells[i].textContent) }",
+        column,
+    )
+    header = page.locator("#grid th", has_text=column)
+    header.click()
+    assert [float(v) for v in values()] == [1.0, 2.5, 4.0]
+    header.click()
+    assert [float(v) for v in values()] == [4.0, 2.5, 1.0]
+    assert not errors
+    page.close()
+
+
+def test_no_report_writes_no_page_for_a_grid_nor_its_cases(tmp_path: Path) -> None:
+    out = tmp_path / "b"
+    result = CliRunner().invoke(
+        main,
+        ["batch", str(PROBLEMS / "holding_m45.toml"), "--out", str(out), "--no-report",
+         "--set", "simulation.duration_s=30", "--quiet"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert not list(out.rglob("report.html"))
+    again = CliRunner().invoke(
+        main,
+        ["batch", str(PROBLEMS / "holding_m45.toml"), "--out", str(out), "--force",
+         "--set", "simulation.duration_s=30", "--quiet"],
+    )  # fmt: skip
+    assert again.exit_code == 0, again.output
+    assert (out / "report.html").exists() and (
+        out / "cases" / "holding_m45" / "report.html"
+    ).exists()

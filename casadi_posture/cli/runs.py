@@ -382,6 +382,16 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
     return lines
 
 
+#: --no-report of batch and what-if.
+NO_GRID_REPORT = click.option(
+    "--no-report",
+    "no_report",
+    is_flag=True,
+    help="Write neither report.html (every case's row in one sortable page, each case "
+    "linked to its own) nor each simulated case's report.html.",
+)
+
+
 @main.command()
 @click.argument("problems", nargs=-1, required=True, type=click.Path())
 @click.option(
@@ -392,12 +402,14 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
 )
 @SOLVER_OPTION
 @SET_OPTION
+@NO_GRID_REPORT
 @batch_options
 def batch(
     problems: tuple[str, ...],
     out: Path,
     solver: str | None,
     sets: tuple[str, ...],
+    no_report: bool,
     jobs: int,
     scheduler: str | None,
     resume: bool,
@@ -429,6 +441,7 @@ def batch(
         resume=resume,
         force=force,
         overrides=parse_sets(sets),
+        report=not no_report,
         quiet=quiet,
     )
     counts = ", ".join(
@@ -498,6 +511,7 @@ def _finish(report: Any) -> None:
 )
 @SOLVER_OPTION
 @SET_OPTION
+@NO_GRID_REPORT
 @batch_options
 def whatif(
     problem: str,
@@ -508,6 +522,7 @@ def whatif(
     paired: bool,
     solver: str | None,
     sets: tuple[str, ...],
+    no_report: bool,
     jobs: int,
     scheduler: str | None,
     resume: bool,
@@ -558,6 +573,7 @@ def whatif(
         force=force,
         max_cases=max_cases,
         overrides=parse_sets(sets, problem),
+        report=not no_report,
         quiet=quiet,
     )
     keys = [axis for axis, _ in parsed]

@@ -85,7 +85,7 @@ class Case:
     """A problem file to run with ``overrides`` (dotted keys), ``solver`` (None: the
     file's), and either the full time simulation or only the static outcomes. ``text``
     carries the file's content to workers that have no copy of it (None: read the file
-    where the case runs)."""
+    where the case runs); ``report`` writes a simulated case's report.html."""
 
     name: str
     problem: str
@@ -93,6 +93,7 @@ class Case:
     solver: str | None = None
     simulate: bool = True
     text: str | None = None
+    report: bool = True
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the case's result (and the tool's version)."""
@@ -188,7 +189,7 @@ def run_case(case: Case) -> Outcome:
             return Outcome(case.name, row, {})
         files: dict[str, bytes] = {}
         if case.simulate:
-            outcomes, files = _simulate(problem, case.solver)
+            outcomes, files = _simulate(problem, case.solver, case.report)
         else:
             outcomes = static_row(solve(problem, case.solver))
         flags = outcomes.pop("flags")
@@ -211,7 +212,12 @@ def one_line(text: str) -> str:
     return line if len(line) <= REASON_CHARACTERS else line[: REASON_CHARACTERS - 3] + "..."
 
 
-def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dict[str, bytes]]:
+def _simulate(
+    problem: Problem, solver: str | None, report: bool
+) -> tuple[dict[str, Any], dict[str, bytes]]:
+    """A simulated case's row and files (with ``report``, its report.html too: an extra,
+    left out if it cannot be written)."""
+    from casadi_posture.output.html_report import write_report
     from casadi_posture.output.plots import plot_simulation
     from casadi_posture.output.results import write_results
     from casadi_posture.output.rows import simulation_row
@@ -222,6 +228,12 @@ def _simulate(problem: Problem, solver: str | None) -> tuple[dict[str, Any], dic
         raise KeyboardInterrupt
     with tempfile.TemporaryDirectory() as folder:
         written = write_results(result, Path(folder)) + plot_simulation(result, Path(folder))
+        if report:
+            try:
+                page = write_report(result, Path(folder) / "report.html")
+            except Exception:  # the page is an extra: never lose a case over it
+                page = None
+            written += [page] if page else []
         files = {p.name: p.read_bytes() for p in written}
     return simulation_row(result), files
 

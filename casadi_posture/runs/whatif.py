@@ -15,7 +15,7 @@ from casadi_posture.runs.batch import Case, safe_name
 from casadi_posture.spec.overrides import parse_value
 
 #: What a what-if writes beside a batch's files (``--force`` deletes them).
-WHATIF_OUTPUTS = ("whatif.csv", "whatif_*_vs_*.png")
+WHATIF_OUTPUTS = ("whatif.csv", "whatif_*_vs_*.png", "report.html")
 
 
 def parse_vary(
