@@ -6,7 +6,7 @@ DEMO_OUT ?= out/demo
 # pytest workers (pytest-xdist): one per core; TEST_WORKERS=0 runs the suite in one process.
 TEST_WORKERS ?= auto
 
-.PHONY: demo test lint benchmark clean
+.PHONY: demo test docs lint benchmark clean
 
 # One stamp per install: the demo needs the package and pandas (the README's Python
 # example makes DataFrames); the tests add pinocchio,
@@ -22,6 +22,10 @@ $(VENV)/.demo: pyproject.toml | $(BIN)/python
 
 $(VENV)/.test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $@
+
+$(VENV)/.docs: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[docs]'
 	touch $@
 
 $(VENV)/.dev: pyproject.toml | $(BIN)/python
@@ -47,6 +51,11 @@ demo: $(VENV)/.demo
 test: $(VENV)/.test
 	$(BIN)/python -m pytest -n $(TEST_WORKERS)
 
+# The documentation site (mkdocs.yml) into site/; --strict fails on a broken link, a missing
+# page or a docstring the API reference cannot render.
+docs: $(VENV)/.docs
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+
 benchmark: $(VENV)/.dev
 	$(BIN)/python benchmarks/scaling.py
 	$(BIN)/python benchmarks/solvers.py
@@ -58,4 +67,4 @@ lint: $(VENV)/.dev
 	$(BIN)/ruff check .
 
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out site .pytest_cache
