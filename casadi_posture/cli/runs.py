@@ -29,6 +29,7 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.animation import WRITERS, check_format
 from casadi_posture.output.html_report import write_report
 from casadi_posture.output.low_back import run_lines as low_back_lines
+from casadi_posture.output.outcome import outcome_lines, time_text
 from casadi_posture.output.plots import plot_simulation
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES, write_results
@@ -282,7 +283,7 @@ def _report(
     for rec in recoveries[:SHOWN_RECOVERIES]:
         rest = " (during a rest: the last held posture)" if rec.get("phase") == "rest" else ""
         click.echo(
-            f"  recovered at {_time(rec['time_s'])}{rest}: "
+            f"  recovered at {time_text(rec['time_s'])}{rest}: "
             f"{moved(start, rec['posture_deg'], show_all)}"
         )
     if len(recoveries) > SHOWN_RECOVERIES:
@@ -331,55 +332,6 @@ def moved(start: dict[str, float], posture: dict[str, float], show_all: bool = F
         largest = max((abs(change[k]) for k in ranked[len(named) :]), default=0.0)
         parts.append(f"{rest} other joints within {max(largest, 0.0):.1f}°")
     return ", ".join(parts) if parts else "the start posture"
-
-
-def _time(seconds: float) -> str:
-    """A time in seconds, and in minutes from one minute on (as the figures' axes)."""
-    return f"{seconds:g} s ({seconds / 60:.1f} min)" if seconds >= 60 else f"{seconds:g} s"
-
-
-def outcome_lines(report: dict[str, Any]) -> list[str]:
-    """The outcome of a simulation in words: limiting group, first to tire, cycles, task."""
-    limiting, first = report["limiting_group_at_start"], report["first_to_fatigue"]
-    exhausted, task = report["exhausted_group"], report["task"]
-    lines = [
-        "limiting group at start (shortest endurance): "
-        + (
-            f"{limiting['half_joint']} ({limiting['region']}, {limiting['endurance_min']:.2f} min)"
-            if limiting
-            else "none (no group tires)"
-        ),
-        "first at the fatigue threshold: "
-        + (
-            f"{first['half_joint']} ({first['region']}) at {_time(first['time_s'])}"
-            if first
-            else "none"
-        ),
-        "exhausted: "
-        + (
-            f"{exhausted['half_joint']} ({exhausted['region']}) at {_time(exhausted['time_s'])}"
-            f" ({exhausted['cause']})"
-            if exhausted
-            else "none"
-        ),
-    ]
-    if report["stop"] == "interrupted" and not report["solver_statistics"]["steps"]:
-        lines.append("task: no step was run")
-    elif not task["held_at_start"]:
-        lines.append(f"task never held: {task['lost']['reason'] if task['lost'] else 'no step'}")
-    elif task["lost"]:
-        lines.append(f"task held {_time(task['held_s'])}, then lost: {task['lost']['reason']}")
-    else:
-        lines.append(f"task held ≥ {_time(task['held_s'])} (to the end of the run)")
-    lines.append(f"fatigue/recovery cycles: {report['fatigue_recovery_cycles']}")
-    if report.get("schedule"):
-        s = report["schedule"]
-        lines.append(
-            f"work-rest schedule: hold {s['hold_s']:g} s, rest {s['rest_s']:g} s; "
-            f"{s['work_cycles']} work cycles ({s['work_cycles_completed']} held to their end), "
-            f"{s['time_holding_s']:g} s holding, {s['time_resting_s']:g} s resting"
-        )
-    return lines
 
 
 #: --no-report of batch and what-if.

@@ -133,9 +133,7 @@ def _echo(result: Sensitivity, problem: str, top: int, kinds: tuple[str, ...]) -
                         r["value"],
                         r["unit"],
                         r["d_endurance_min_per_unit"],
-                        "n/a (input 0)"
-                        if r["endurance_elasticity"] is None
-                        else r["endurance_elasticity"],
+                        _elasticity(r["endurance_elasticity"]),
                         r["d_load_pct_mvc_per_unit"],
                     ]
                     for r in rows
@@ -154,6 +152,11 @@ def _echo(result: Sensitivity, problem: str, top: int, kinds: tuple[str, ...]) -
         click.echo(f"FLAGGED: {flag}")
 
 
+def _elasticity(value: float | None) -> float | str:
+    """An elasticity for a table: none exists for an input whose value is 0."""
+    return "n/a (input 0)" if value is None else value
+
+
 def _echo_compression(result: Sensitivity, top: int, kinds: tuple[str, ...]) -> None:
     """The inputs ranked by the L5/S1 compression's elasticity (a body with a lumbar joint)."""
     ranked = result.ranked_compression(kinds)
@@ -169,9 +172,7 @@ def _echo_compression(result: Sensitivity, top: int, kinds: tuple[str, ...]) -> 
                     r["value"],
                     r["unit"],
                     r["d_compression_N_per_unit"],
-                    "n/a (input 0)"
-                    if r["compression_elasticity"] is None
-                    else r["compression_elasticity"],
+                    _elasticity(r["compression_elasticity"]),
                 ]
                 for r in ranked[:top]
             ],

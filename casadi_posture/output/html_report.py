@@ -35,6 +35,7 @@ from casadi_posture.output.key_postures import title
 from casadi_posture.output.low_back import run_lines as back_lines
 from casadi_posture.output.low_back import step_low_back
 from casadi_posture.output.mannequin import CONTEXT, fill
+from casadi_posture.output.outcome import outcome_lines
 from casadi_posture.output.results import summary
 from casadi_posture.output.scene import EDGE, SUPPORT, Scene, clip_line, plane_polygon
 from casadi_posture.output.scores import run_lines as score_lines
@@ -437,62 +438,25 @@ def _events(fig: go.Figure, result: SimulationResult, groups: list[int], scale: 
                                                                       for k in kinds])  # fmt: skip
 
 
-def summary_html(report: dict[str, Any], unit: str) -> str:
-    """summary.json in words, as HTML: what was held and how long, which group limits and
-    which gave out, the scores and the low back, the flags."""
-    e = html.escape
-
-    def when(seconds: float) -> str:
-        return f"{seconds:g} s" if unit == "s" else f"{seconds / 60:.1f} min ({seconds:g} s)"
-
-    task, items = report["task"], []
-    lost = e(task["lost"]["reason"]) if task["lost"] else ""
-    if not report["solver_statistics"]["steps"]:
-        items.append("No step was run.")
-    elif not task["held_at_start"]:
-        items.append(f"The task was never held: {lost}.")
-    elif task["lost"]:
-        items.append(
-            f"Level 1 ({e(task['level1'])}) held for <b>{when(task['held_s'])}</b>, then lost: "
-            f"{lost}."
-        )
-    else:
-        items.append(
-            f"Level 1 ({e(task['level1'])}) held for <b>at least {when(task['held_s'])}</b>, "
-            "to the end of the run."
-        )
-    limiting = report["limiting_group_at_start"]
-    if limiting:
-        items.append(
-            f"Shortest endurance at the start: <b>{limiting['half_joint']}</b> "
-            f"({limiting['region']}) at {limiting['load_pct_mvc']:.1f} %MVC, "
-            f"{limiting['endurance_min']:.2f} min."
-        )
-    first, exhausted = report["first_to_fatigue"], report["exhausted_group"]
-    if first:
-        items.append(
-            f"First at the fatigue threshold: {first['half_joint']} at {when(first['time_s'])}."
-        )
-    if exhausted:
-        items.append(
-            f"Gave out: <b>{exhausted['half_joint']}</b> ({exhausted['region']}) at "
-            f"{when(exhausted['time_s'])} ({e(exhausted['cause'])})."
-        )
-    items.append(f"Fatigue/recovery cycles: {report['fatigue_recovery_cycles']}.")
-    lines = score_lines(report["rula_reba"]) + back_lines(report["low_back"])
-    items += [e(line.strip()) for line in lines]
+def summary_html(report: dict[str, Any]) -> str:
+    """summary.json in words, as HTML: the console's outcome lines (what was held and how
+    long, which group limits and which gave out), the scores and the low back, the balance
+    margin, the flags."""
+    lines = outcome_lines(report) + score_lines(report["rula_reba"])
+    lines += back_lines(report["low_back"])
     if report["balance_margin_min_m"] is not None:
-        items.append(
-            f"Smallest balance margin: {100 * report['balance_margin_min_m']:.1f} cm (the centre "
-            "of mass inside the support polygon when positive)."
+        lines.append(
+            f"smallest balance margin: {100 * report['balance_margin_min_m']:.1f} cm (the "
+            "centre of mass inside the support polygon when positive)"
         )
-    flags = "".join(f"<li>FLAGGED: {e(f)}</li>" for f in report["flags"])
+    items = "".join(f"<li>{html.escape(line.strip())}</li>" for line in lines)
+    flags = "".join(f"<li>FLAGGED: {html.escape(f)}</li>" for f in report["flags"])
     verdict = (
         f"<ul class='flags'>{flags}</ul>"
         if flags
         else "<p class='ok'>No flags: the answer can be used as it is.</p>"
     )
-    return "<ul>" + "".join(f"<li>{i}</li>" for i in items) + "</ul>" + verdict
+    return f"<ul>{items}</ul>{verdict}"
 
 
 def _when(seconds: float) -> tuple[float, str]:
@@ -535,7 +499,7 @@ def report_html(result: SimulationResult) -> str:
         subtitle=html.escape(
             f"{result.problem.path}{changed} · {title(result)} · plotly {plotly.__version__}"
         ),
-        summary=summary_html(report, unit),
+        summary=summary_html(report),
         plotly=_plotly_gzip(),
         body=_inline(body.to_json()),
         curves=_inline(curves.to_json()),
