@@ -27,15 +27,18 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.animation import check_format, write_animation
+from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
 from casadi_posture.output.html_report import write_report
-from casadi_posture.output.plain import plain
+from casadi_posture.output.plain import dumps, plain
 from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
+from casadi_posture.output.posture_page import write_solve_page
 from casadi_posture.output.results import (
     event_columns,
     summary,
     timeline_columns,
     write_results,
+    write_table,
 )
 from casadi_posture.output.rows import simulation_row
 from casadi_posture.problem import (
@@ -47,6 +50,7 @@ from casadi_posture.problem import (
 )
 from casadi_posture.runs import compare as comparison
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
+from casadi_posture.runs.compare_report import write_compare_page
 from casadi_posture.runs.grid_report import PAGE, write_grid_report
 from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
 from casadi_posture.runs.whatif_plots import plot_outcomes
@@ -195,9 +199,46 @@ def simulate(problem: Problem, solver: str | None = None) -> Simulation:
     return Simulation(run_simulation(problem, solver))
 
 
+def write_solve(
+    answer: StaticAnswer, out: str | Path, *, report: bool = True, force: bool = False
+) -> list[Path]:
+    """Write a solved ``answer`` into ``out`` (a new or empty folder, or any with
+    ``force``): solve.json (what ``solve --json`` prints) and, with ``report``, report.html
+    (the start and the answer in 3-D, the summary, the loads: one page for a browser)."""
+    out = Path(out)
+    check_out(out, force=force, key="out")
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "solve.json"
+    path.write_text(dumps(answer_json(answer, str(answer.problem.path))) + "\n", encoding="utf-8")
+    return [path] + ([write_solve_page(answer, out / "report.html")] if report else [])
+
+
 def compare(problem: Problem) -> comparison.Comparison:
     """Both IK solvers from the same start, and a verdict on whether they agree."""
     return comparison.compare(problem)
+
+
+def write_compare(
+    compared: Sequence[tuple[Problem, comparison.Comparison, Sequence[str]]],
+    out: str | Path,
+    *,
+    report: bool = True,
+    force: bool = False,
+) -> list[Path]:
+    """Write comparisons into ``out`` (a new or empty folder, or any with ``force``):
+    compare.csv (a row per problem and level) and, with ``report``, report.html (a row per
+    problem; a click shows its start and both solvers' postures). ``compared``: each
+    problem, its comparison and its flags (lines; none when it can be used as it is)."""
+    out = Path(out)
+    check_out(out, force=force, key="out")
+    out.mkdir(parents=True, exist_ok=True)
+    table_rows = [row for _, c, _ in compared for row in comparison.rows(c)]
+    columns = {k: [r[k] for r in table_rows] for k in (table_rows[0] if table_rows else {})}
+    write_table(columns, out / "compare.csv")
+    written = [out / "compare.csv"]
+    if report and compared:
+        written.append(write_compare_page(compared, out / "report.html"))
+    return written
 
 
 def whatif(

@@ -41,10 +41,9 @@ from casadi_posture.ergonomics.posture_scores import (
 )
 from casadi_posture.errors import ProblemError
 from casadi_posture.frames import frame
-from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import cached_solver
-from casadi_posture.ik.tasks import Comfort, JointReference
+from casadi_posture.ik.tasks import Comfort
 from casadi_posture.problem import Problem
 
 #: A load above this exceeds the group's maximum voluntary torque [%MVC].
@@ -142,14 +141,23 @@ def rule(problem: Problem) -> str:
 
 @dataclass(frozen=True)
 class Level:
-    """A priority level's outcome: its tasks, residual [``unit``] and whether it was achieved
-    (residual at most ``ACHIEVED_TOLERANCE``)."""
+    """A priority level's outcome: its tasks, residual [``unit``], whether it was achieved
+    (residual at most ``ACHIEVED_TOLERANCE``) and whether it is the ``criterion`` (the last
+    level of comfort or joint-reference tasks: minimised, never expected to reach zero)."""
 
     level: int
     tasks: str
     residual: float
     unit: str
     achieved: bool
+    criterion: bool = False
+
+    @property
+    def outcome(self) -> str:
+        """In a word or three: yes, NO, or minimised (a criterion)."""
+        if self.criterion and not self.achieved:
+            return "minimised (criterion)"
+        return "yes" if self.achieved else "NO"
 
 
 @dataclass(frozen=True)
@@ -314,8 +322,9 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
     name = solver or problem.spec.solver.name
     result = cached_solver(name, hierarchy, problem.spec.solver).solve(problem.posture)
     answer = at_posture(problem, result.q)
+    criterion = hierarchy.criterion_level()
     levels = tuple(
-        Level(k + 1, tasks, float(result.residuals[k]), unit, result.achieved[k])
+        Level(k + 1, tasks, float(result.residuals[k]), unit, result.achieved[k], k == criterion)
         for k, (tasks, unit) in enumerate(
             zip(hierarchy.level_names(), hierarchy.level_units(), strict=True)
         )
@@ -328,9 +337,8 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
             f"{ACHIEVED_TOLERANCE:g} {top.unit}; the task is out of the body's reach or "
             "blocked by a joint limit (positions are in metres)"
         )
-    criteria = _criterion_level(hierarchy)
     for level in levels[1:]:
-        if not level.achieved and level.level - 1 != criteria:
+        if not level.achieved and not level.criterion:
             flags.append(
                 f"level {level.level} ({level.tasks}) not achieved: residual "
                 f"{level.residual:.3g} {level.unit} > {ACHIEVED_TOLERANCE:g} {level.unit}; "
@@ -348,15 +356,6 @@ def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
         answer.scores,
         answer.low_back,
     )
-
-
-def _criterion_level(hierarchy: TaskHierarchy) -> int | None:
-    """The index of the last level when it only settles what the tasks leave free (comfort or
-    joint-reference tasks: minimised, never expected to reach zero); None otherwise."""
-    last = hierarchy.levels[-1]
-    if len(hierarchy.levels) > 1 and all(isinstance(t, Comfort | JointReference) for t in last):
-        return len(hierarchy.levels) - 1
-    return None
 
 
 def _over_strength(groups: Sequence[GroupLoad]) -> list[str]:

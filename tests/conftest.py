@@ -1,7 +1,8 @@
-"""Shared fixtures: the shipped problems and small hand-built models."""
+"""Shared fixtures: the shipped problems, small hand-built models and a headless browser."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,9 @@ import pytest
 from casadi_posture.body.tree import BodyModel, Dof, Landmark, Segment
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+#: The browser the report tests drive (Debian's package; .ci/run installs it).
+CHROMIUM = Path("/usr/bin/chromium")
 
 #: The shipped shelf scenario for a 1.65 m, 60 kg woman with the shelf raised to 1.6 m: the
 #: hands cannot reach it (0.62 m ahead) and rest 0.104 m short with the arms straight.
@@ -22,6 +26,20 @@ SHORT_REACH = {
     "tasks[2].target_m[2]": 1.6,
     "tasks[3].target_m[2]": 1.6,
 }
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium for the pages' tests (skipped without it, failed in CI)."""
+    if not CHROMIUM.exists():
+        if os.environ.get("CI"):
+            pytest.fail(f"{CHROMIUM} is missing: .ci/run installs it (apt-get install chromium)")
+        pytest.skip(f"no {CHROMIUM} (apt-get install chromium)")
+    sync_playwright = pytest.importorskip("playwright.sync_api").sync_playwright
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=str(CHROMIUM))
+        yield chromium
+        chromium.close()
 
 
 @pytest.fixture

@@ -5,9 +5,7 @@ drawn."""
 
 from __future__ import annotations
 
-import io
 import json
-import os
 import re
 import time
 from pathlib import Path
@@ -19,18 +17,13 @@ from click.testing import CliRunner
 
 from casadi_posture import api, interrupt
 from casadi_posture.cli import main
-from casadi_posture.output.html_report import (
-    frame_steps,
-    placements,
-    rounded,
-    shown_groups,
-    write_report,
-)
+from casadi_posture.output.html_body import placements, rounded
+from casadi_posture.output.html_report import frame_steps, shown_groups, write_report
 from casadi_posture.output.scene import Scene
 from casadi_posture.output.skeleton import Skeleton
+from tests.browser import mesh_of, open_page, pixels_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
-CHROMIUM = Path("/usr/bin/chromium")
 
 #: The standing wall hold for 120 s: the right shoulder flexors reach the fatigue
 #: threshold at 80 s and the constraint takes over (two events), so the posture moves.
@@ -43,39 +36,6 @@ def standing(tmp_path_factory: pytest.TempPathFactory):
     run = api.simulate(api.load(PROBLEMS / "standing_wall_horizontal.toml", STANDING))
     files = run.write(out, figures=False)
     return run, out, files
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not CHROMIUM.exists():
-        if os.environ.get("CI"):
-            pytest.fail(f"{CHROMIUM} is missing: .ci/run installs it (apt-get install chromium)")
-        pytest.skip(f"no {CHROMIUM} (apt-get install chromium)")
-    sync_playwright = pytest.importorskip("playwright.sync_api").sync_playwright
-    with sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(executable_path=str(CHROMIUM))
-        yield chromium
-        chromium.close()
-
-
-def _open(browser, path: Path):
-    """The report in a new page, drawn; and the list its console errors go to."""
-    page = browser.new_page(viewport={"width": 1400, "height": 1200})
-    errors: list[str] = []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(path.resolve().as_uri())
-    page.wait_for_function("window.reportReady === true", timeout=60_000)
-    return page, errors
-
-
-def _mesh(page) -> dict[str, np.ndarray]:
-    """The body's surfaces as drawn: vertices (n × 3 [m]) by trace name."""
-    traces = page.evaluate(
-        "document.getElementById('body').data.filter(t => t.type === 'mesh3d')"
-        ".map(t => [t.name, t.x, t.y, t.z])"
-    )
-    return {name: np.c_[x, y, z] for name, x, y, z in traces if name != "floor" and len(x) > 4}
 
 
 def test_the_report_is_written_beside_the_run_s_files(standing) -> None:
@@ -114,7 +74,7 @@ def test_the_placements_move_the_mannequin_where_the_skeleton_puts_it(standing) 
     skeleton = Skeleton(result.problem.body, result.timeline.q)
     frames = list(dict.fromkeys(part.dof for part in skeleton.parts))
     step = result.timeline.time.size - 1
-    placed = placements(result, frames, np.array([0, step]))[1]
+    placed = placements(result.problem.body, result.timeline.q, frames, np.array([0, step]))[1]
     for part, solid in zip(skeleton.parts, skeleton.solids(step), strict=True):
         t, rotation = placed[frames.index(part.dof), :, 0], placed[frames.index(part.dof), :, 1:]
         np.testing.assert_allclose(t + part.points() @ rotation.T, solid, atol=1e-12)
@@ -123,19 +83,19 @@ def test_the_placements_move_the_mannequin_where_the_skeleton_puts_it(standing) 
 def test_the_report_works_in_a_browser(standing, browser, tmp_path: Path) -> None:
     run, out, _ = standing
     result = run.result
-    page, errors = _open(browser, out / "report.html")
+    page, errors = open_page(browser, out / "report.html")
     data = json.loads(page.inner_text("#report-data"))
     last = len(data["time"]) - 1
-    first = _mesh(page)
+    first = mesh_of(page)
     before = page.locator("#body").screenshot()
     page.locator("#slider").fill(str(last))  # as a user drags it: an input event
     page.wait_for_function(f"window.reportFrame === {last}")
-    moved = _mesh(page)
+    moved = mesh_of(page)
     assert not errors, errors
     # The body drawn at the last moment is the run's last posture (to the page's rounding).
     step = int(np.searchsorted(result.timeline.time, data["time"][last]))
     assert step == result.timeline.time.size - 1
-    scene = Scene(result, [step])
+    scene = Scene.of_run(result, [step])
     solids = scene.skeleton.solids(step)
     for name, task in (("body", False), ("task limbs", True)):
         expected = [
@@ -150,7 +110,7 @@ def test_the_report_works_in_a_browser(standing, browser, tmp_path: Path) -> Non
     assert cursor == pytest.approx(data["time"][last] / data["scale"])
     assert page.inner_text("#clock").startswith(f"t = {data['time'][last]:g} s")
     after = page.locator("#body").screenshot()
-    pixels = [_pixels(shot) for shot in (before, after)]
+    pixels = [pixels_of(shot) for shot in (before, after)]
     for image in pixels:
         assert image.std() > 20  # not blank
         blue = image[..., 2].astype(int) - image[..., 0] > 40  # the body, not the grey box
@@ -160,16 +120,10 @@ def test_the_report_works_in_a_browser(standing, browser, tmp_path: Path) -> Non
     page.close()
 
 
-def _pixels(png: bytes) -> np.ndarray:
-    from PIL import Image
-
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
-
-
 def test_a_planar_arm_is_drawn_in_its_plane(browser, tmp_path: Path) -> None:
     run = api.simulate(api.load(PROBLEMS / "holding_m45.toml", {"simulation.duration_s": 60.0}))
     path = write_report(run.result, tmp_path / "report.html")
-    page, errors = _open(browser, path)
+    page, errors = open_page(browser, path)
     kinds = page.evaluate("document.getElementById('body').data.map(t => t.type)")
     assert set(kinds) == {"scatter"} and not errors, (kinds, errors)
     body = page.evaluate("document.getElementById('body').data.find(t => t.name === 'body')")

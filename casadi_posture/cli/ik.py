@@ -20,10 +20,18 @@ from casadi_posture.cli.common import (
 )
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.output import low_back
+from casadi_posture.output.answer import answer_json
 from casadi_posture.output.report import table
-from casadi_posture.output.results import write_table
-from casadi_posture.output.scores import lines, static_report
+from casadi_posture.output.scores import lines
 from casadi_posture.runs.compare import rows
+
+NO_REPORT_OPTION = click.option(
+    "--no-report",
+    "no_report",
+    is_flag=True,
+    help="Do not write report.html (one page for a browser: the postures in 3-D, the "
+    "summary, the loads and the tables).",
+)
 
 
 @main.command()
@@ -32,12 +40,29 @@ from casadi_posture.runs.compare import rows
 @SET_OPTION
 @ALL_OPTION
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Folder for solve.json (what --json prints) and report.html [default: print only].",
+)
+@NO_REPORT_OPTION
+@FORCE_OPTION
 def solve(
-    problem: str, solver: str | None, sets: tuple[str, ...], show_all: bool, as_json: bool
+    problem: str,
+    solver: str | None,
+    sets: tuple[str, ...],
+    show_all: bool,
+    as_json: bool,
+    out: Path | None,
+    no_report: bool,
+    force: bool,
 ) -> None:
     """Solve the prioritized IK of a problem from its posture_deg; print the posture,
     the residual of each priority level and whether it was achieved, the active
-    constraints and the torques there.
+    constraints and the torques there. With --out, also write solve.json and report.html
+    (one page that opens offline in a browser: the start and the answer in 3-D, the
+    summary, the loads; not with --no-report).
 
     Exits with code 1, saying why, when the answer cannot be used as it is: the solver
     failed (its status is printed), level 1 was not achieved (residual above
@@ -48,36 +73,18 @@ def solve(
     Example:
       casadi-posture solve problems/line_plane_hysteresis.toml
       casadi-posture solve problems/line_plane_hysteresis.toml --solver nullspace --json
+      casadi-posture solve problems/standing_shelf_box.toml --out out/shelf
     """
     resolved = problem_from(problem, sets=sets)
     resolved.hierarchy()  # a problem without tasks is refused, naming its file
+    if out is not None:
+        api.check_out(out, force=force)
     answer = api.solve(resolved, solver)
     result = answer.ik
     levels = [level.__dict__ for level in answer.levels]
+    written = [] if out is None else api.write_solve(answer, out, report=not no_report, force=force)
     if as_json:
-        emit_json(
-            {
-                "problem": problem,
-                "solver": result.solver,
-                "status": result.status,
-                "success": result.success,
-                "reached": answer.reached,
-                "flags": list(answer.flags),
-                "iterations": result.iterations,
-                "wall_time_s": result.wall_time_s,
-                "posture_deg": answer.posture_deg,
-                "achieved_tolerance": ACHIEVED_TOLERANCE,
-                "levels": levels,
-                "at_limits": list(result.at_limits),
-                "inequality_active": result.inequality_active,
-                "endurance_rule": answer.rule,
-                "torques": {"dofs": answer.dofs(), "half_joints": answer.half_joints()},
-                "capable": answer.capable_report(),
-                "plausibility": answer.plausibility.to_dict() if answer.plausibility else None,
-                "rula_reba": static_report(answer.problem, answer.scores),
-                "low_back": low_back.static_report(answer.low_back),
-            }
-        )
+        emit_json(answer_json(answer, problem))
     else:
         click.echo(
             f"{problem}: {result.solver}, status {result.status}, {result.iterations} "
@@ -92,9 +99,9 @@ def solve(
                         lv["tasks"],
                         f"{lv['residual']:.3g}",
                         lv["unit"],
-                        "yes" if lv["achieved"] else "NO",
+                        level.outcome,
                     ]
-                    for lv in levels
+                    for lv, level in zip(levels, answer.levels, strict=True)
                 ],
             )
         )
@@ -105,6 +112,8 @@ def solve(
         echo_torques(answer, show_all)
         for line in [*lines(answer.problem, answer.scores), *low_back.lines(answer.low_back)]:
             click.echo(line)
+        for path in written:
+            click.echo(f"written: {path}")
         for flag in answer.flags:
             click.echo(f"FLAGGED: {flag}")
     if answer.flags:
@@ -117,16 +126,25 @@ def solve(
     "--out",
     type=click.Path(file_okay=False, path_type=Path),
     default=None,
-    help="Folder for compare.csv.",
+    help="Folder for compare.csv and report.html.",
 )
+@NO_REPORT_OPTION
 @SET_OPTION
 @FORCE_OPTION
 def compare_command(
-    problems: tuple[str, ...], out: Path | None, sets: tuple[str, ...], force: bool
+    problems: tuple[str, ...],
+    out: Path | None,
+    no_report: bool,
+    sets: tuple[str, ...],
+    force: bool,
 ) -> None:
     """Solve each problem with both IK solvers from the same start and compare them:
     residual per level, largest joint difference, wall time, status, and a verdict
     that says why they disagree (an unreachable target, two posture families).
+
+    With --out, writes compare.csv and report.html (one page that opens offline in a
+    browser: a row per problem; a click on it shows the start and both solvers' postures
+    in 3-D, the verdict and the tables; not with --no-report).
 
     Problems without tasks are skipped. Exits with code 1 when any problem disagrees, a
     solver fails, or level 1 is not achieved (residual above 0.0001 m or rad).
@@ -138,20 +156,23 @@ def compare_command(
     if out is not None:
         api.check_out(out, force=force)
     table_rows: list[dict[str, object]] = []
-    flagged = []
+    flagged, compared = [], []
     for path in problems:
         resolved = problem_from(path, sets=sets)
         if not resolved.tasks:
             click.echo(f"skipped {path}: no tasks")
             continue
         comparison = api.compare(resolved)
+        flags = []
         if not comparison.agree:
-            flagged.append(f"{path}: the solvers disagree: {comparison.verdict}")
+            flags.append(f"the solvers disagree: {comparison.verdict}")
         unreached = [
             r.solver for r in (comparison.nullspace, comparison.lexicographic) if not r.achieved[0]
         ]
         if unreached:
-            flagged.append(f"{path}: level 1 not achieved by {' and '.join(unreached)}")
+            flags.append(f"level 1 not achieved by {' and '.join(unreached)}")
+        flagged += [f"{path}: {flag}" for flag in flags]
+        compared.append((resolved, comparison, flags))
         table_rows += rows(comparison)
     headers = [
         "problem",
@@ -187,10 +208,8 @@ def compare_command(
         )
     )
     if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        columns = {k: [r[k] for r in table_rows] for k in (table_rows[0] if table_rows else {})}
-        write_table(columns, out / "compare.csv")
-        click.echo(f"\nwritten: {out / 'compare.csv'}")
+        written = api.write_compare(compared, out, report=not no_report, force=True)
+        click.echo("\n" + "\n".join(f"written: {path}" for path in written))
     for line in flagged:
         click.echo(f"FLAGGED: {line}")
     if flagged:

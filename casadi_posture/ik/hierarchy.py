@@ -11,7 +11,7 @@ import numpy as np
 
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.errors import ProblemError
-from casadi_posture.ik.tasks import Task
+from casadi_posture.ik.tasks import Comfort, JointReference, Task
 
 
 @dataclass(frozen=True)
@@ -88,6 +88,15 @@ class TaskHierarchy:
     def level_units(self) -> list[str]:
         """Unit of each level's residual: 'm', 'rad' or 'm, rad' for a mixed level."""
         return [", ".join(sorted({t.unit for t in level}, reverse=True)) for level in self.levels]
+
+    def criterion_level(self) -> int | None:
+        """The index of the last level when it only settles what the tasks leave free
+        (comfort or joint-reference tasks: minimised, never expected to reach zero); None
+        otherwise."""
+        last = self.levels[-1]
+        if len(self.levels) > 1 and all(isinstance(t, Comfort | JointReference) for t in last):
+            return len(self.levels) - 1
+        return None
 
     def free_dofs(self, q: np.ndarray) -> int:
         """DOFs no level determines at ``q`` [rad]: n − rank of all levels' Jacobians. Each

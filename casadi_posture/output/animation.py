@@ -124,7 +124,7 @@ class _Frames:
 
     def __init__(self, result: SimulationResult, steps: list[int]) -> None:
         self.result = result
-        scene = Scene(result, steps)
+        scene = Scene.of_run(result, steps)
         self.fig = fig = plt.figure(figsize=(9.0, 6.0), dpi=100)
         grid = fig.add_gridspec(
             2, 3, height_ratios=[4.5, 1.1], width_ratios=[1.5, 0.9, 0.9], left=0.05, right=0.99,

@@ -64,7 +64,7 @@ def postures_3d_figure(result: SimulationResult) -> Figure:
     projection on the floor, the support polygon, the tasks' targets and the loads. The
     views are the axes labelled sagittal, frontal, top and 3-D."""
     shown = key_postures(result, unit="min")
-    scene = Scene(result, [step for step, _, _ in shown])
+    scene = Scene.of_run(result, [step for step, _, _ in shown])
     dx, dy, dz = scene.spans
     wide = max(dx + dy, dz)  # the 3-D view's column [m]: its axes are square
     scale = min(HEIGHT_IN / (dz + dy), WIDTH_IN / (dx + dy + wide))  # in per m in every view

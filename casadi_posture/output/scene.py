@@ -5,6 +5,7 @@ of mass and its vertical projection on the floor, the support polygon, the tasks
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -29,6 +30,7 @@ from casadi_posture.output.mannequin import (
     tint,
 )
 from casadi_posture.output.skeleton import AXES, Skeleton
+from casadi_posture.problem import Problem
 from casadi_posture.simulation import SimulationResult
 
 #: The orthographic views: world axes drawn across and up, and what the view looks at.
@@ -140,27 +142,29 @@ def add_3d_view(fig: Figure, cell: SubplotSpec) -> Axes:
 
 
 class Scene:
-    """A run's skeleton, centre of mass, support polygons, task shapes and loads, the
-    ``task_limbs`` (those that carry a task's effector or segment or a load), and a box
-    [m] around them at the ``steps`` that will be drawn."""
+    """The skeleton of ``problem``'s body at the postures ``q`` (rows [rad]), its centre of
+    mass, support polygons, the ``tasks``' shapes and the loads, the ``task_limbs`` (those
+    that carry a task's effector or segment or a load), and a box [m] around them at the
+    rows ``steps`` that will be drawn."""
 
-    def __init__(self, result: SimulationResult, steps: list[int]) -> None:
-        problem = result.problem
-        self.result = result
+    def __init__(
+        self, problem: Problem, tasks: Sequence[Task], q: np.ndarray, steps: list[int]
+    ) -> None:
+        self.problem, self.q = problem, q
         down = np.array([0.0, 0.0, -problem.body.gravity])
         forces = [(load.at, load.mass * down + load.force, load) for load in problem.loads]
         self.loads = [(at, force, load) for at, force, load in forces if force.any()]
         extra = tuple(dict.fromkeys(at for at, _, _ in self.loads))
         carried = tuple((load.at, load.mass) for load in problem.loads if load.mass > 0)
-        self.skeleton = Skeleton(problem.body, result.timeline.q, extra, carried)
-        self.shapes = task_shapes(result.tasks)
-        effectors = [getattr(task, "effector", None) for task in result.tasks]
+        self.skeleton = Skeleton(problem.body, q, extra, carried)
+        self.shapes = task_shapes(tuple(tasks))
+        effectors = [getattr(task, "effector", None) for task in tasks]
         effectors += [at for at, _, _ in self.loads]
-        segments = [getattr(task, "segment", None) for task in result.tasks]
+        segments = [getattr(task, "segment", None) for task in tasks]
         self.task_limbs = limbs_of(
             problem.body, self.skeleton.parts, filter(None, effectors), filter(None, segments)
         )
-        self.polygons = {s: support_polygon(problem.body, result.timeline.q[s]) for s in steps}
+        self.polygons = {s: support_polygon(problem.body, q[s]) for s in steps}
         points = np.concatenate([self.skeleton.points[s].T for s in steps])
         solids = [p.reshape(-1, 3) for s in steps for p in self.skeleton.solids(s)]
         self.floor = bool(points[:, 2].min() > -FLOOR_TOLERANCE)
@@ -180,6 +184,11 @@ class Scene:
         box = np.vstack([body, *near, *floor])
         pad = 0.08 * max(float(np.ptp(box, axis=0).max()), 0.1)
         self.lo, self.hi = box.min(axis=0) - pad, box.max(axis=0) + pad
+
+    @classmethod
+    def of_run(cls, result: SimulationResult, steps: list[int]) -> Scene:
+        """The scene of a simulated run at its timeline's ``steps``."""
+        return cls(result.problem, result.tasks, result.timeline.q, steps)
 
     @property
     def spans(self) -> np.ndarray:

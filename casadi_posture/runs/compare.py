@@ -20,12 +20,14 @@ JOINT_TOLERANCE_DEG = 1e-3
 
 @dataclass(frozen=True)
 class Comparison:
-    """The two results on one problem, the largest joint difference [deg] and a verdict."""
+    """The two results on one problem, the largest joint difference [deg] and a verdict;
+    ``criterion`` the index of the level that is only minimised (comfort), or None."""
 
     problem: str
     dofs: list[str]
     levels: list[str]
     units: list[str]
+    criterion: int | None
     nullspace: IKResult
     lexicographic: IKResult
     max_joint_difference_deg: float
@@ -56,12 +58,14 @@ def compare(problem: Problem) -> Comparison:
     ns = cached_solver("nullspace", hierarchy, problem.spec.solver).solve(problem.posture)
     lx = cached_solver("lexicographic", hierarchy, problem.spec.solver).solve(problem.posture)
     difference = float(np.max(np.abs(np.degrees(ns.q - lx.q))))
-    agree, verdict = _verdict(ns, lx, difference)
+    criterion = hierarchy.criterion_level()
+    agree, verdict = _verdict(ns, lx, difference, criterion)
     return Comparison(
         str(problem.path),
         list(problem.body.dof_names),
         hierarchy.level_names(),
         hierarchy.level_units(),
+        criterion,
         ns,
         lx,
         difference,
@@ -70,13 +74,19 @@ def compare(problem: Problem) -> Comparison:
     )
 
 
-def _verdict(ns: IKResult, lx: IKResult, difference: float) -> tuple[bool, str]:
+def _verdict(
+    ns: IKResult, lx: IKResult, difference: float, criterion: int | None
+) -> tuple[bool, str]:
+    """Whether the solvers agree, and why not; the ``criterion`` level (minimised, not a
+    target) is never called unreachable."""
     failed = [r for r in (ns, lx) if not r.success]
     if failed:
         return False, "; ".join(f"{r.solver} failed: {r.status}" for r in failed)
     gap = np.abs(ns.residuals - lx.residuals)
     unreachable = [
-        k + 1 for k in range(gap.size) if min(ns.residuals[k], lx.residuals[k]) > RESIDUAL_TOLERANCE
+        k + 1
+        for k in range(gap.size)
+        if k != criterion and min(ns.residuals[k], lx.residuals[k]) > RESIDUAL_TOLERANCE
     ]
     if np.any(gap > RESIDUAL_TOLERANCE):
         k = int(np.argmax(gap > RESIDUAL_TOLERANCE)) + 1
@@ -106,6 +116,7 @@ def rows(comparison: Comparison) -> list[dict[str, object]]:
                 "residual_lexicographic": float(comparison.lexicographic.residuals[k]),
                 "achieved_nullspace": comparison.nullspace.achieved[k],
                 "achieved_lexicographic": comparison.lexicographic.achieved[k],
+                "criterion": k == comparison.criterion,
                 "max_joint_difference_deg": comparison.max_joint_difference_deg,
                 "time_nullspace_ms": 1e3 * comparison.nullspace.wall_time_s,
                 "time_lexicographic_ms": 1e3 * comparison.lexicographic.wall_time_s,

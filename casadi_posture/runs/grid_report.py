@@ -6,25 +6,15 @@ from __future__ import annotations
 
 import base64
 import html
-import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 from urllib.parse import quote
 
+from casadi_posture.output.html_page import cell, scripts, write_page
 from casadi_posture.runs.batch import CASES, BatchReport
 
 #: The page's name in a batch or what-if folder.
 PAGE = "report.html"
-
-
-def _cell(value: Any) -> str:
-    """A value as a table cell: numbers to 4 significant digits, empty for missing."""
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return ""
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    return html.escape(str(value))
 
 
 def _case_link(out: Path, name: str) -> str:
@@ -40,20 +30,18 @@ def grid_html(report: BatchReport, out: Path, heading: str, figures: Sequence[Pa
     """The page: ``heading``, the counts by status, the rows of ``report`` (columns as in
     summary.csv) and ``figures`` (PNG files) embedded."""
     every = list(dict.fromkeys(k for row in report.rows for k in row))
-    constant = [
-        c for c in every if c != "case" and len({_cell(r.get(c)) for r in report.rows}) == 1
-    ]
+    constant = [c for c in every if c != "case" and len({cell(r.get(c)) for r in report.rows}) == 1]
     columns = [c for c in every if c not in constant or len(report.rows) == 1]
     same = "".join(
-        f"<li>{html.escape(c)}: {_cell(report.rows[0].get(c))}</li>"
+        f"<li>{html.escape(c)}: {cell(report.rows[0].get(c))}</li>"
         for c in constant
-        if c not in columns and _cell(report.rows[0].get(c))
+        if c not in columns and cell(report.rows[0].get(c))
     )
     head = "".join(f"<th>{html.escape(c)}</th>" for c in columns)
     body = "".join(
         "<tr>"
         + "".join(
-            f"<td>{_case_link(out, row['case']) if c == 'case' else _cell(row.get(c))}</td>"
+            f"<td>{_case_link(out, row['case']) if c == 'case' else cell(row.get(c))}</td>"
             for c in columns
         )
         + "</tr>"
@@ -79,6 +67,7 @@ def grid_html(report: BatchReport, out: Path, heading: str, figures: Sequence[Pa
         same=f"<details><summary>The same for every case</summary><ul>{same}</ul></details>"
         if same
         else "",
+        script=scripts("sortable.js"),
     )
 
 
@@ -86,11 +75,7 @@ def write_grid_report(
     report: BatchReport, out: Path, heading: str, figures: Sequence[Path] = ()
 ) -> Path:
     """Write the page into ``out``/report.html (under a temporary name, then renamed)."""
-    path = out / PAGE
-    partial = path.with_suffix(".html.partial")
-    partial.write_text(grid_html(report, out, heading, figures), encoding="utf-8")
-    partial.replace(path)
-    return path
+    return write_page(grid_html(report, out, heading, figures), out / PAGE)
 
 
 TEMPLATE = """<!DOCTYPE html>
@@ -115,27 +100,8 @@ img {{ max-width: 640px; border: 1px solid #ddd; }}
 <tbody>{body}</tbody></table></div>
 {figures}
 <script>
-document.querySelectorAll("#grid th").forEach((th, column) => {{
-  th.addEventListener("click", () => {{
-    const tbody = document.querySelector("#grid tbody");
-    const rows = Array.from(tbody.rows);
-    const up = !th.classList.contains("sorted-up");
-    const key = (row) => {{
-      const text = row.cells[column].textContent.trim();
-      const number = Number(text);
-      return text !== "" && !Number.isNaN(number) ? [0, number] : [1, text];
-    }};
-    rows.sort((a, b) => {{
-      const [p, q] = [key(a), key(b)];
-      const order = p[0] - q[0] || (p[1] < q[1] ? -1 : p[1] > q[1] ? 1 : 0);
-      return up ? order : -order;
-    }});
-    rows.forEach((row) => tbody.appendChild(row));
-    const heads = document.querySelectorAll("#grid th");
-    heads.forEach((h) => h.classList.remove("sorted-up", "sorted-down"));
-    th.classList.add(up ? "sorted-up" : "sorted-down");
-  }});
-}});
+{script}
+sortable(document.getElementById("grid"));
 </script>
 </body></html>
 """

@@ -1,0 +1,86 @@
+"""What every HTML page of ours shares: plotly.js embedded once, gzip-compressed (the browser
+inflates it, so a page opens offline), JSON safe inside a script element, the scripts,
+tables, and a page written whole or not at all."""
+
+from __future__ import annotations
+
+import base64
+import gzip
+import html
+import math
+from collections.abc import Sequence
+from functools import cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from plotly.offline import get_plotlyjs
+
+from casadi_posture.problem import Problem
+
+
+@cache
+def plotly_gzip() -> str:
+    """plotly.js, gzip-compressed and base64-encoded (about 1.9 MB instead of 4.8)."""
+    return base64.b64encode(gzip.compress(get_plotlyjs().encode(), 9, mtime=0)).decode()
+
+
+def inline(text: str) -> str:
+    """JSON safe inside a <script> element."""
+    return text.replace("</", "<\\/")
+
+
+def scripts(*names: str) -> str:
+    """The package's page scripts ``names``, in order (``viewer.js``: the body's view;
+    ``sortable.js``: tables sorted by a click on a heading)."""
+    folder = resources.files("casadi_posture.output")
+    return "\n".join(folder.joinpath(name).read_text() for name in names)
+
+
+def cell(value: Any) -> str:
+    """A value as a table cell: numbers to 4 significant digits, empty for missing."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return html.escape(str(value))
+
+
+def table(headers: Sequence[str], rows: Sequence[Sequence[Any]], **attributes: str) -> str:
+    """An HTML table of ``rows`` (cells by :func:`cell`) under ``headers``."""
+    extra = "".join(f' {k.rstrip("_")}="{html.escape(v)}"' for k, v in attributes.items())
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in headers)
+    body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in row) + "</tr>" for row in rows)
+    return f"<table{extra}><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def write_page(text: str, path: Path) -> Path:
+    """``text`` into ``path``, written whole or not at all (a Ctrl-C leaves no half page)."""
+    partial = path.with_name(path.name + ".partial")
+    try:
+        partial.write_text(text, encoding="utf-8")
+        partial.replace(path)
+    finally:
+        partial.unlink(missing_ok=True)
+    return path
+
+
+def problem_line(problem: Problem) -> str:
+    """The problem file and the keys set on the command line, for a page's subtitle."""
+    sets = ", ".join(f"{k} = {v}" for k, v in problem.overrides.items())
+    return f"{problem.path} with {sets}" if sets else str(problem.path)
+
+
+#: The head of every page with a body's view (a ``str.format`` template: ``{title}``; the
+#: page's own style follows, then ``</style>``).
+HEAD = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>{title}</title>
+<style>
+body {{ font-family: system-ui, sans-serif; margin: 0 1em 2em; color: #222; }}
+h1 {{ font-size: 1.3em; margin: 0.5em 0 0; }} .sub {{ color: #666; font-size: 0.85em; }}
+ul {{ margin: 0.3em 0; padding-left: 1.2em; }} .flags {{ color: #b00020; }}
+.ok {{ color: #2a7a2a; margin: 0.2em 0; }} #loading {{ color: #666; }}
+#views {{ display: flex; flex-wrap: wrap; gap: 0.5em; }}
+"""
