@@ -14,9 +14,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from casadi_posture.design import design
 from casadi_posture.output.report import table
 from casadi_posture.problem import load_problem
+from casadi_posture.workplace_design import design
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 SHELF = {"tasks[2].target_m[2],tasks[3].target_m[2]": (1.0, 1.6)}

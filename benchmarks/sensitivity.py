@@ -12,7 +12,7 @@ from pathlib import Path
 
 import casadi_posture as cp
 from casadi_posture.output.report import table
-from casadi_posture.sensitivity.analysis import sensitivity
+from casadi_posture.sensitivity_analysis.analysis import sensitivity
 from casadi_posture.static import solve
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"

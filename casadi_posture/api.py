@@ -63,7 +63,7 @@ from casadi_posture.static import solve as solve_static
 def load(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
     """A problem file, validated and resolved; ``overrides`` set dotted keys first
     (``{"loads[0].mass_kg": 5.0, "fatigue.strategy": "passive"}``). Bad input raises
-    :class:`ProblemError` naming the file, the key, the value and what was expected."""
+    ``ProblemError`` naming the file, the key, the value and what was expected."""
     return load_problem(path, overrides)
 
 
@@ -113,7 +113,7 @@ def curve(
 def plot_curve(
     result: TorqueCurve, path: str | Path, *, title: str | None = None, force: bool = False
 ) -> Path:
-    """Draw a :func:`curve` as the paper's Fig. 3 into ``path`` (.png, .pdf, .svg, ...):
+    """Draw a ``curve`` as the paper's Fig. 3 into ``path`` (.png, .pdf, .svg, ...):
     a new file, or any with ``force``."""
     path = Path(path)
     check_figure(path, force=force, key="path")
@@ -268,7 +268,7 @@ def whatif(
     others; with ``report`` each simulated case gets its report.html and ``out`` one page
     of the grid (report.html: the table, sortable, and the figures).
 
-    ``problem`` is a file, or a :class:`Problem` loaded from one (its overrides are kept):
+    ``problem`` is a file, or a ``Problem`` loaded from one (its overrides are kept):
     every case is rebuilt from the file where it runs. With ``jobs`` > 1 a script must
     start its work under ``if __name__ == "__main__":`` (worker processes import it)."""
     path, given = _problem_file(problem, overrides)
@@ -341,7 +341,7 @@ def _problem_file(
     problem: str | Path | Problem, overrides: Mapping[str, Any] | None
 ) -> tuple[str, dict[str, Any]]:
     """The file a what-if runs from, and the overrides every case starts with: a
-    :class:`Problem` stands for its file and its own overrides, if the file still holds
+    ``Problem`` stands for its file and its own overrides, if the file still holds
     the text it was loaded from."""
     if not isinstance(problem, Problem):
         return str(problem), dict(overrides or {})

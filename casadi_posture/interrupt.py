@@ -1,8 +1,8 @@
 """Ctrl-C that stops a long run cleanly, between two steps or two cases.
 
 IPOPT, through CasADi, catches SIGINT while it solves and carries on, so Python's
-default ``KeyboardInterrupt`` is lost. Inside :func:`deferred` a Ctrl-C only sets a
-flag, which the time loop and the batch loop read between steps (:func:`requested`):
+default ``KeyboardInterrupt`` is lost. Inside ``deferred`` a Ctrl-C only sets a
+flag, which the time loop and the batch loop read between steps (``requested``):
 a run stops within one step, keeps what it has, and says it was interrupted. A second
 Ctrl-C raises ``KeyboardInterrupt`` at once wherever Python code runs.
 """
@@ -48,7 +48,7 @@ def deferred() -> Iterator[None]:
 
 
 def requested() -> bool:
-    """Whether Ctrl-C was pressed inside the current :func:`deferred` block."""
+    """Whether Ctrl-C was pressed inside the current ``deferred`` block."""
     return _requested.is_set()
 
 

@@ -124,7 +124,7 @@ class Problem:
 
 
 def read_problem_text(path: str | Path) -> str:
-    """The text of a problem file; a missing or unreadable file raises :class:`ProblemError`."""
+    """The text of a problem file; a missing or unreadable file raises ``ProblemError``."""
     path = Path(path)
     try:
         return path.read_text(encoding="utf-8")
@@ -139,7 +139,7 @@ def read_problem_text(path: str | Path) -> str:
 def load_problem(
     path: str | Path, overrides: Mapping[str, Any] | None = None, *, text: str | None = None
 ) -> Problem:
-    """Read, validate and resolve a problem file; any fault raises :class:`ProblemError`.
+    """Read, validate and resolve a problem file; any fault raises ``ProblemError``.
 
     ``overrides`` sets dotted keys before validation, e.g. ``{"fatigue.strategy":
     "passive", "loads[0].mass_kg": 5.0}`` (command-line options, what-if grids).
@@ -169,7 +169,7 @@ def problem_from_data(
     data: Mapping[str, Any], name: str | Path = "<data>", overrides: Mapping[str, Any] | None = None
 ) -> Problem:
     """Validate and resolve a problem given as plain data (what a problem file holds, as a
-    dict); ``name`` names it in messages; ``overrides`` as for :func:`load_problem`."""
+    dict); ``name`` names it in messages; ``overrides`` as for ``load_problem``."""
     path = Path(name)
     _check_nesting(data, path)
     raw = apply(dict(data), overrides or {}, path)

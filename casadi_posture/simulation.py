@@ -246,10 +246,10 @@ def simulate(
 
     Stops early when a half-joint is exhausted (fatigue 1, or a load above its strength,
     which exhausts it at once), when the top priority level cannot be achieved at the
-    start (the task is never held), or on Ctrl-C (:mod:`casadi_posture.interrupt`): the
+    start (the task is never held), or on Ctrl-C (``casadi_posture.interrupt``): the
     result then holds the steps run so far and ``stop`` says why. A step whose solver
     fails, stalls or leaves level 1 unachieved is solved again by the other solver from
-    the same start (:func:`_solve_step`); the timeline records which solver gave each
+    the same start (``_solve_step``); the timeline records which solver gave each
     posture. With ``stop_at_threshold`` the run also ends at the first step on which a group
     reaches ``fatigue.fatigue_threshold`` (``stop == "fatigue_threshold"``), the moment the
     fatigue-reducing constraint would engage.

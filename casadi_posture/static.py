@@ -162,14 +162,14 @@ class Level:
 
 @dataclass(frozen=True)
 class StaticAnswer:
-    """Torques, loads and endurances at one posture: the problem's own (:func:`at_posture`)
-    or the one the IK solves for (:func:`solve`, which sets ``ik`` and ``levels``), and the
+    """Torques, loads and endurances at one posture: the problem's own (``at_posture``)
+    or the one the IK solves for (``solve``, which sets ``ik`` and ``levels``), and the
     share of men and women able to exert its torques (``capable``, biomech/capability.py).
     ``flags`` say, one line each, why the answer cannot be used as it is (empty: it can);
     ``plausibility`` reports how plausible the posture is for a person (its flags are
     among ``flags``); ``scores`` its RULA and REBA per side (none for a body they do not
-    fit: :func:`posture_scores`); ``low_back`` the compression and shear at L5/S1 (None
-    for a body without a lumbar joint: :func:`low_back`)."""
+    fit: ``posture_scores``); ``low_back`` the compression and shear at L5/S1 (None
+    for a body without a lumbar joint: ``low_back``)."""
 
     problem: Problem
     torques: Torques
@@ -215,7 +215,7 @@ class StaticAnswer:
 
     @property
     def rule(self) -> str:
-        """The rule behind every endurance (:func:`rule`)."""
+        """The rule behind every endurance (``rule``)."""
         return rule(self.problem)
 
     def dofs(self) -> list[dict[str, float | str]]:
@@ -271,7 +271,7 @@ class StaticAnswer:
 
     def capable_report(self) -> dict[str, object]:
         """The share of men and of women capable of the task [%] with its weakest group and
-        the design limit, the notes, which SDs are estimates, and :meth:`capable_groups`."""
+        the design limit, the notes, which SDs are estimates, and ``capable_groups``."""
         return {
             **self.capable.to_dict(),
             "notes": self.capable.notes(),
@@ -284,7 +284,7 @@ class StaticAnswer:
         return frame(self.half_joints())
 
     def capable_frame(self) -> object:
-        """:meth:`capable_groups` as a pandas DataFrame (needs pandas)."""
+        """``capable_groups`` as a pandas DataFrame (needs pandas)."""
         return frame(self.capable_groups())
 
     def dofs_frame(self) -> object:

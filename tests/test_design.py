@@ -14,8 +14,8 @@ from click.testing import CliRunner
 from conftest import PROBLEMS
 
 from casadi_posture.cli import main
-from casadi_posture.design import design, independent_rows, spread
 from casadi_posture.problem import load_problem, problem_from_data
+from casadi_posture.workplace_design import design, independent_rows, spread
 
 X_M = 0.40  # the wrist's fixed horizontal distance from the shoulder [m]
 LOAD_KG = 2.0

@@ -19,9 +19,9 @@ from conftest import PROBLEMS
 from casadi_posture import static
 from casadi_posture.biomech.low_back import LowBackModel
 from casadi_posture.cli import main
-from casadi_posture.design import Design, design
-from casadi_posture.design.nlp import _measures
 from casadi_posture.problem import load_problem
+from casadi_posture.workplace_design import Design, design
+from casadi_posture.workplace_design.nlp import _measures
 
 SHELF = PROBLEMS / "standing_shelf_box.toml"
 HANDS = ("tasks[2].target_m[2]", "tasks[3].target_m[2]")  # both hands at the shelf's height

@@ -3,6 +3,7 @@ the site strictly; this test needs no MkDocs (PyYAML comes with the test extras,
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -39,3 +40,21 @@ def test_every_docs_page_is_in_the_nav_once() -> None:
     assert len(pages) == len(set(pages)), "a page is in the nav twice"
     assert set(pages) <= on_disk, f"nav entries without a page: {set(pages) - on_disk}"
     assert on_disk - NOT_IN_NAV == set(pages), f"pages not in the nav: {on_disk - set(pages)}"
+
+
+def test_the_api_reference_documents_every_public_name() -> None:
+    """Each ``cp.<name>`` (but the version) has its ``::: module.name`` entry in
+    reference.md, and every entry resolves to the public object."""
+    import importlib
+
+    import casadi_posture as cp
+
+    entries = re.findall(r"^::: ([\w.]+)$", (ROOT / "docs/reference.md").read_text(), re.M)
+    documented = {}
+    for entry in entries:
+        module, name = entry.rsplit(".", 1)
+        documented[name] = getattr(importlib.import_module(module), name)
+    public = [name for name in cp.__all__ if name != "__version__"]
+    assert set(public) - set(documented) == set(), "public names left out of reference.md"
+    for name in public:
+        assert documented[name] is getattr(cp, name), name

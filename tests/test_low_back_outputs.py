@@ -262,7 +262,7 @@ def test_a_planar_arm_says_not_computed_never_zero(tmp_path: Path) -> None:
 def test_sensitivity_ranks_the_compression_with_derivatives_equal_to_finite_differences() -> None:
     """The AD derivative, the posture's own change included, against central differences of
     the solved compression (±0.1 % of each input)."""
-    from casadi_posture.sensitivity.analysis import sensitivity
+    from casadi_posture.sensitivity_analysis.analysis import sensitivity
 
     result = sensitivity(cp.load(SHELF))
     keys = [item.key for item in result.inputs]

@@ -16,9 +16,9 @@ import casadi_posture as cp
 from casadi_posture.biomech.fatigue import fatigue_model
 from casadi_posture.cli import main
 from casadi_posture.problem import Problem, problem_from_data
-from casadi_posture.sensitivity.analysis import Sensitivity, sensitivity
-from casadi_posture.sensitivity.parametric import Input, ParametricProblem
-from casadi_posture.sensitivity.posture import posture_derivative
+from casadi_posture.sensitivity_analysis.analysis import Sensitivity, sensitivity
+from casadi_posture.sensitivity_analysis.parametric import Input, ParametricProblem
+from casadi_posture.sensitivity_analysis.posture import posture_derivative
 from casadi_posture.static import group_loads
 from casadi_posture.static import solve as solve_static
 

@@ -89,7 +89,7 @@ class Capability:
         return min(loaded, key=lambda g: (g.capable_pct[sex], -g.required), default=None)
 
     def below_design_limit(self, sex: Sex) -> bool:
-        """Whether the task's share is below :data:`DESIGN_LIMIT_PCT` for ``sex``."""
+        """Whether the task's share is below ``DESIGN_LIMIT_PCT`` for ``sex``."""
         return self.share(sex) < DESIGN_LIMIT_PCT[sex]
 
     def to_dict(self) -> dict[str, Any]:
@@ -151,7 +151,7 @@ def normal_cdf(z: Any) -> Any:
 def share_capable(mean: Any, sd: Any, required: Any) -> Any:
     """Share [%] of a population whose strength ~ N(mean, sd²) [N·m] reaches ``required``
     [N·m]: Φ((mean − required)/sd) × 100; floats, numpy arrays or CasADi expressions.
-    (The "carries nothing counts as 100 %" rule is :func:`capability`'s.)"""
+    (The "carries nothing counts as 100 %" rule is ``capability``'s.)"""
     return 100.0 * normal_cdf((mean - required) / sd)
 
 
@@ -231,7 +231,7 @@ def capability(groups: Sequence[PopulationStrength], required: Sequence[float]) 
 
 def _share(group: PopulationStrength, sex: Sex, required: float) -> float:
     """One group's share [%]: 100 when it carries nothing, 0 when the population's mean
-    strength is not positive (a regression outside its range), else :func:`share_capable`."""
+    strength is not positive (a regression outside its range), else ``share_capable``."""
     if required <= 0.0:
         return 100.0
     if group.mean[sex] <= 0.0:

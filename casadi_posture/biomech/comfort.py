@@ -99,7 +99,7 @@ class ComfortMeasure:
         return ca.vertcat(*parts)
 
     def value(self, body: BodyModel, q: np.ndarray, **torques: np.ndarray) -> float:
-        """C(q) at a posture ``q`` [rad] (with the torques :meth:`rows` needs for effort)."""
+        """C(q) at a posture ``q`` [rad] (with the torques ``rows`` needs for effort)."""
         r = np.asarray(self.rows(body, q, self.neutral, **torques), dtype=float)
         return float(r.ravel() @ r.ravel())
 
@@ -107,7 +107,7 @@ class ComfortMeasure:
 def neutral_posture(body: BodyModel, given: Mapping[str, float] | None = None) -> np.ndarray:
     """The neutral posture of ``body`` [rad]: ``given`` [deg] per DOF name, else the shipped
     neutral angle of the DOF's name without its side suffix; a DOF with neither raises
-    :class:`ProblemError` (key ``neutral_deg``)."""
+    ``ProblemError`` (key ``neutral_deg``)."""
     return _per_dof(body, "neutral", given or {}, "neutral_deg", math.radians)[0]
 
 
@@ -122,7 +122,7 @@ def comfort_measure(
 ) -> ComfortMeasure:
     """The measure ``name`` on ``body`` with the shipped data (``data/comfort.toml``) and what a
     problem file sets: term ``weights``, ``joint_weights`` γ and ``neutral_deg`` per DOF
-    (unknown names and DOFs without data raise :class:`ProblemError` under ``key``)."""
+    (unknown names and DOFs without data raise ``ProblemError`` under ``key``)."""
     if name not in MEASURES:
         raise ProblemError(None, f"{key}.measure", name, f"one of {list(MEASURES)}")
     given = dict(weights or {})

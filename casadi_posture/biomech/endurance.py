@@ -52,7 +52,7 @@ Value = Callable[[Parameter], ca.SX | float]
 
 
 def numeric(record: Parameter) -> float:
-    """A record's own value (the :data:`Value` of a plain evaluation)."""
+    """A record's own value (the ``Value`` of a plain evaluation)."""
     return record.value
 
 

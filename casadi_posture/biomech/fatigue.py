@@ -45,11 +45,11 @@ class FatigueModel(Protocol):
 
     def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
         """Time [s] from rest to a fatigue level of 1 under each constant load [%MVC]: the static
-        endurance by the same rule as :meth:`step` (``inf`` where no fatigue accumulates)."""
+        endurance by the same rule as ``step`` (``inf`` where no fatigue accumulates)."""
         ...
 
     def endurance_expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX | None:
-        """:meth:`endurance_time_s` [s] as a CasADi expression of a load [%MVC] at which it is
+        """``endurance_time_s`` [s] as a CasADi expression of a load [%MVC] at which it is
         finite, each parameter record given by ``value(record)``; None where the time is found
         by time stepping (no derivative)."""
         ...
@@ -391,7 +391,7 @@ class ThreeCompartmentFatigue:
         return times.reshape(load.shape)
 
     def endurance_expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> None:
-        """None: the 3CC time to failure is found by time stepping (:meth:`endurance_time_s`)."""
+        """None: the 3CC time to failure is found by time stepping (``endurance_time_s``)."""
         return None
 
     def rule(self) -> str:

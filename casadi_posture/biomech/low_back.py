@@ -89,8 +89,8 @@ def low_back_expressions(
     extensor_arm: float | ca.SX,
     flexor_arm: float | ca.SX,
 ) -> ca.SX:
-    """The :data:`OUTPUTS` as a column of expressions of ``body.q``, the load vector ``p``
-    (:func:`pack`) and the muscles' moment arms [m] (numbers or symbols)."""
+    """The ``OUTPUTS`` as a column of expressions of ``body.q``, the load vector ``p``
+    (``pack``) and the muscles' moment arms [m] (numbers or symbols)."""
     if not has_lumbar_joint(body):
         raise ProblemError(
             None,
@@ -122,7 +122,7 @@ def low_back_expressions(
 class LowBackModel:
     """The low-back function of one body with its loads, built once:
     ``function(q, loads) -> (compression, shear, lateral_shear, sagittal_moment,
-    muscle_force)``, ``loads`` packed as for the torque model (:func:`pack`)."""
+    muscle_force)``, ``loads`` packed as for the torque model (``pack``)."""
 
     def __init__(self, body: BodyModel, loads: Sequence[Load]) -> None:
         self.body = body

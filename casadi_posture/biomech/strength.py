@@ -60,8 +60,8 @@ def default_strength(
     without it are used, the record keeps the full name. By the table the group is in:
     the elbow flexors from the Harbo et al. 2012 regression at this stature [m], body mass
     [kg] and age [years] times the group's Gymnast strength ratio; the group's own Harbo
-    regression; Anderson et al. 2007 young adults' c1·m·g·h of the sex (:func:`anderson_young`)
-    or our estimate c·m·g·h, both times :func:`age_factor`. The record's source shows the
+    regression; Anderson et al. 2007 young adults' c1·m·g·h of the sex (``anderson_young``)
+    or our estimate c·m·g·h, both times ``age_factor``. The record's source shows the
     computation.
     """
     group = data_name(half_joint)

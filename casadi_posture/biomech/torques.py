@@ -49,7 +49,7 @@ class TorqueModel:
     """The torque functions of one body with its loads, compiled once.
 
     ``function(q, loads) -> (tau_ext, tau_pas, tau_act, strength, dtau_ext)`` with ``loads``
-    the vector of :func:`casadi_posture.loads.pack`, so load masses and forces
+    the vector of ``casadi_posture.loads.pack``, so load masses and forces
     can change without rebuilding anything.
     """
 
@@ -105,7 +105,7 @@ def torque_expressions(
     strength: Mapping[str, Strength],
 ) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
     """External, passive and active torque per DOF [N·m] and strength per half-joint [N·m]
-    as expressions of ``body.q`` and the load vector ``p`` (:func:`pack`); the body's
+    as expressions of ``body.q`` and the load vector ``p`` (``pack``); the body's
     geometry and the models' coefficients may be symbols too."""
     q = body.q
     tau_ext = _external(body, loads, p)
@@ -146,7 +146,7 @@ def _external(body: BodyModel, loads: Sequence[Load], p: ca.SX) -> ca.SX:
 def footing_function(body: BodyModel, ats: tuple[str, ...]) -> ca.Function | None:
     """``footing(q, loads) -> (c, s)`` of a body standing on two feet with loads at the
     landmarks ``ats``: the centre of pressure ``c`` (x, y) [m] of everything applied
-    (weights, loads, pushes; ``loads`` packed by :func:`pack`) and the carried foot's share
+    (weights, loads, pushes; ``loads`` packed by ``pack``) and the carried foot's share
     ``s`` [-] of the floor's reaction (body/support.py); ``None`` otherwise. Built once per
     body and load points."""
     if carried_foot(body) is None:

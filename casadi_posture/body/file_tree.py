@@ -1,5 +1,5 @@
 """A body tree as a problem file describes it (``body.tree``): its cross-references checked
-with the file's keys, then built into a :class:`BodyModel` (docs/problem-files.md)."""
+with the file's keys, then built into a ``BodyModel`` (docs/problem-files.md)."""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ reaction is statically indeterminate; the model splits it by a stated rule:
 
 The carried foot's reaction enters the external torque by virtual work like a push. An
 ``s`` outside [0, 1] (the centre of pressure beyond a foot) needs the floor to pull that
-foot down: :func:`floor_pressure` gives ``s`` and ``c`` so that answers can flag them.
+foot down: ``floor_pressure`` gives ``s`` and ``c`` so that answers can flag them.
 """
 
 from __future__ import annotations
@@ -191,5 +191,5 @@ def _support(body: BodyModel) -> Support:
 
 
 def support_polygon(body: BodyModel, q: np.ndarray) -> np.ndarray | None:
-    """The support polygon of ``body`` at posture ``q`` [rad] (see :class:`Support`)."""
+    """The support polygon of ``body`` at posture ``q`` [rad] (see ``Support``)."""
     return _support(body).polygon(np.asarray(q, dtype=float))

@@ -153,7 +153,7 @@ ALL_OPTION = click.option(
 
 def shown_groups(loads: Sequence[float], over: Sequence[bool], show_all: bool) -> list[int]:
     """Indices of the half-joints a table shows: every one with ``show_all`` or on a body of
-    at most :data:`SHOWN_GROUPS`, else the most loaded [%MVC] (every one over strength among
+    at most ``SHOWN_GROUPS``, else the most loaded [%MVC] (every one over strength among
     them), in the body's order."""
     order = sorted(range(len(loads)), key=lambda k: (not over[k], -loads[k]))
     if show_all or len(loads) <= SHOWN_GROUPS:

@@ -12,10 +12,6 @@ import numpy as np
 from casadi_posture import api
 from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.cli.common import FORCE_OPTION, SET_OPTION, emit_json, main, problem_from
-from casadi_posture.design.answer import Design, sweep
-from casadi_posture.design.objectives import OBJECTIVES, Score
-from casadi_posture.design.quantities import parse_free
-from casadi_posture.design.solve import design
 from casadi_posture.output.design_plots import (
     SWEEP_POINTS,
     plot_compression,
@@ -24,6 +20,10 @@ from casadi_posture.output.design_plots import (
 )
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import fmt, table
+from casadi_posture.workplace_design.answer import Design, sweep
+from casadi_posture.workplace_design.objectives import OBJECTIVES, Score
+from casadi_posture.workplace_design.quantities import parse_free
+from casadi_posture.workplace_design.solve import design
 
 
 @main.command(name="design")

@@ -322,7 +322,7 @@ MOVED_DEG = 1.0
 def moved(start: dict[str, float], posture: dict[str, float], show_all: bool = False) -> str:
     """The joints of ``posture`` [deg] that moved most from ``start`` [deg], as
     'shoulder_flexion_r 18.8 → -28.9°' (every joint with ``show_all``), and how many others
-    stayed within :data:`MOVED_DEG`."""
+    stayed within ``MOVED_DEG``."""
     change = {k: posture[k] - start[k] for k in posture}
     ranked = sorted(change, key=lambda k: -abs(change[k]))
     named = ranked if show_all else [k for k in ranked[:SHOWN_MOVES] if abs(change[k]) >= MOVED_DEG]

@@ -20,8 +20,8 @@ from casadi_posture.cli.common import (
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import table
 from casadi_posture.output.tornado import plot_tornado
-from casadi_posture.sensitivity.analysis import Sensitivity, sensitivity
-from casadi_posture.sensitivity.parametric import KINDS
+from casadi_posture.sensitivity_analysis.analysis import Sensitivity, sensitivity
+from casadi_posture.sensitivity_analysis.parametric import KINDS
 
 
 @main.command(name="sensitivity")

@@ -73,7 +73,7 @@ class TaskHierarchy:
         )
 
     def offset(self, task: Task) -> int:
-        """Where ``task``'s parameters start in :attr:`targets`."""
+        """Where ``task``'s parameters start in ``targets``."""
         return self._offsets[task.name]
 
     @property

@@ -146,7 +146,7 @@ class LexicographicSolver:
 
     def _level(self, k: int) -> tuple[Compiled, Compiled | None]:
         """The IPOPT and SQP solvers of level k+1, built on first use (shared by the solvers
-        :meth:`rebind` makes)."""
+        ``rebind`` makes)."""
         built = self._built[k]
         if built is None:
             nlp, hessian = self._problem(k)

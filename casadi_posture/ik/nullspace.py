@@ -26,12 +26,12 @@ on some DOFs select rows of Z. Neither needs its Jacobian evaluated.
 
 Joint limits and the inequality aᵀq ≤ b: joints held at a limit are moved onto it and
 removed from Z_0; the inequality, while held, is the highest-priority equality
-aᵀΔq = b - aᵀq, undamped. See :meth:`NullspaceSolver._held_step` for when they are held;
-in :meth:`NullspaceSolver.solve`, of what a step takes beyond, the clamping loop holds first
+aᵀΔq = b - aᵀq, undamped. See ``NullspaceSolver._held_step`` for when they are held;
+in ``NullspaceSolver.solve``, of what a step takes beyond, the clamping loop holds first
 what it reaches first (``FIRST_REACHED``).
-Near a solution the iterations are extrapolated (:class:`_Anderson`).
+Near a solution the iterations are extrapolated (``_Anderson``).
 
-The damping floor (:meth:`NullspaceSolver.solve` only; :meth:`NullspaceSolver.iteration`
+The damping floor (``NullspaceSolver.solve`` only; ``NullspaceSolver.iteration``
 is the plain step above). Each level below the first is linearised without the curvature
 of the task constraints above it, a term of the order of its residual r_k times the
 curvature of those tasks. Along a direction in which J̃_k is nearly singular (an
@@ -53,7 +53,7 @@ never nearly singular) and rises while the steps oscillate (``REVERSAL``). With 
 joints held, a step is zero exactly where the paper's is (the gains differ, not the
 directions they act on): the floor changes the path, not where it may stop; which joints
 stay held is decided by the free step of the solve's own sweep
-(:meth:`NullspaceSolver._held_step`). A missed level whose residual lies along the
+(``NullspaceSolver._held_step``). A missed level whose residual lies along the
 directions the floor lifts is at rest out of reach, at a singularity of J̃_k: the sweep
 stops there and the levels below wait (``OUT_OF_REACH``).
 """
@@ -152,7 +152,7 @@ REST_DISTANCE = ACHIEVED_TOLERANCE
 STEP_PROGRESS = 0.999
 
 
-#: Saddles (:meth:`NullspaceSolver._leave_saddles`). A level whose own gradient Jₖᵀeₖ is
+#: Saddles (``NullspaceSolver._leave_saddles``). A level whose own gradient Jₖᵀeₖ is
 #: below ``STATIONARY`` times ‖Jₖ‖‖eₖ‖ (outside what the joint limits and the inequality
 #: block) is not held off by a higher level: at rest with it missed, the iteration sits where
 #: its linear model sees no way down. Its second derivative is then tested along the motions
@@ -173,13 +173,13 @@ SADDLE_PROBE = 1e-3
 SADDLE_STEPS = (0.02, 0.05, 0.1, 0.2, 0.5)
 SADDLE_RESTARTS = 3
 
-#: First-order optimality (:meth:`NullspaceSolver._unbalanced`). The clamping loop holds a
+#: First-order optimality (``NullspaceSolver._unbalanced``). The clamping loop holds a
 #: joint at its limit when the sweep's Gauss-Newton step takes it beyond, which is not the
 #: sign of its multiplier: at rest the first missed level k may still pull a held joint (or
 #: the held inequality) back inside, so that it could go lower with the levels above kept.
 #: At rest with such a level, its gradient Jₖᵀeₖ is tested for the Karush-Kuhn-Tucker
 #: conditions with the levels above as equalities and the held limits and inequality as
-#: inequalities (nonnegative multipliers, :func:`_nnls`). A remainder above ``KKT_TOLERANCE``
+#: inequalities (nonnegative multipliers, ``_nnls``). A remainder above ``KKT_TOLERANCE``
 #: times ‖Jₖ‖‖eₖ‖ is the active-set method's cue: the constraint with the most negative
 #: least-squares multiplier is released, and the run restarts from the rest posture with the
 #: others held for its first iteration (``SADDLE_RESTARTS`` in all with the saddles; the
@@ -194,7 +194,7 @@ SADDLE_RESTARTS = 3
 KKT_TOLERANCE = 1e-4
 
 
-#: The damping floor of :meth:`NullspaceSolver.solve` (module docstring): when a step of at
+#: The damping floor of ``NullspaceSolver.solve`` (module docstring): when a step of at
 #: least ``ACCELERATED_STEP`` turns back on the one before by more than
 #: arccos(-``REVERSAL``) (a period-2 oscillation: the step overshoots along a direction the
 #: Gauss-Newton model misjudges), every κ_k is multiplied by ``FLOOR_RAISE``, up to
@@ -347,7 +347,7 @@ class _Level:
     identity: bool = False
 
 
-#: The held constraints are tested for release (:meth:`NullspaceSolver._held_step`) on the
+#: The held constraints are tested for release (``NullspaceSolver._held_step``) on the
 #: first iteration and every ``RETEST``-th after it, besides when they grow, when an
 #: iteration brings no progress and at rest. Every 2nd, 4th or 8th iteration gave the same
 #: iteration counts from warm starts on the benchmark humanoids; every 8th doubled them from
@@ -355,7 +355,7 @@ class _Level:
 #: the tasks soon pull back.
 RETEST = 4
 
-#: In :meth:`NullspaceSolver.solve` (:meth:`NullspaceSolver.iteration` is the paper's loop)
+#: In ``NullspaceSolver.solve`` (``NullspaceSolver.iteration`` is the paper's loop)
 #: the clamping loop holds, of the free joints a step takes beyond a limit and the inequality
 #: if it violates it, those the step reaches first: a constraint at its bound already
 #: (within ``ACTIVE_TOLERANCE``) is reached at once, the others at the fraction of the step
@@ -539,7 +539,7 @@ class NullspaceSolver:
         self, q: np.ndarray, dx: np.ndarray, inequality: Inequality | None, held: _Held
     ) -> np.ndarray:
         """Δq [rad] of the priority sweep towards Δx with the ``held`` constraints (and the
-        damping floor ``self._floor`` while :meth:`solve` runs)."""
+        damping floor ``self._floor`` while ``solve`` runs)."""
         tol, n, side = self.options.rank_tolerance, q.size, held.side
         floor = self._floor
         dq, basis = np.zeros(n), None  # None: Z = I, every joint free
@@ -598,8 +598,8 @@ class NullspaceSolver:
         self, q: np.ndarray, dq: np.ndarray, inequality: Inequality | None, held: _Held
     ) -> _Held | None:
         """``held`` with the free joints the step Δq [rad] takes more than ``limit_slack``
-        beyond a limit and the inequality if it violates it (while :meth:`solve` runs, those
-        it reaches first: :meth:`_first_reached`); None when it takes nothing new beyond."""
+        beyond a limit and the inequality if it violates it (while ``solve`` runs, those
+        it reaches first: ``_first_reached``); None when it takes nothing new beyond."""
         after, free = q + dq, True if held.side is None else held.side == 0
         below = free & (after < self._lower_slack)
         above = free & (after > self._upper_slack)
@@ -763,7 +763,7 @@ class NullspaceSolver:
     def _iterations(
         self, q: np.ndarray, inequality: Inequality | None, limit: int, held: _Held = _NOTHING
     ) -> tuple[np.ndarray, str, int]:
-        """The iterations of :meth:`solve` from ``q`` [rad] with ``held`` held for the first
+        """The iterations of ``solve`` from ``q`` [rad] with ``held`` held for the first
         (untested): the posture, status, count."""
         accelerate = _Anderson(self.options.acceleration_memory)
         status, iterations, best, since = "max_iterations", 0, None, 0

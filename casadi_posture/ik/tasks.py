@@ -56,7 +56,7 @@ class Task:
         raise NotImplementedError
 
     def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
-        """Residual e(q, p) as a column; ``p`` holds :meth:`targets`."""
+        """Residual e(q, p) as a column; ``p`` holds ``targets``."""
         raise NotImplementedError
 
 
@@ -87,7 +87,7 @@ class Line(Task):
         return np.array(self.point, dtype=float)
 
     def helper_axis(self) -> int:
-        """The world axis most nearly normal to the line, which :func:`normal_rows` starts
+        """The world axis most nearly normal to the line, which ``normal_rows`` starts
         from (kept when the direction changes a little, so the rows change smoothly)."""
         return int(np.argmin(np.abs(np.asarray(self.direction, dtype=float))))
 
@@ -228,7 +228,7 @@ class Comfort(Task):
     """How uncomfortable the posture is (biomech/comfort.py), the residual whose squared norm
     is the ``measure``: the criterion that settles what the levels above leave free, at the
     lowest level. Its parameters are the neutral posture [rad] and, when the measure counts
-    effort, the loads (:func:`pack`) and each half-joint's effort weight c_g (1 by default;
+    effort, the loads (``pack``) and each half-joint's effort weight c_g (1 by default;
     1 + k·F_g under the whole-body fatigue adjustment), so neither rebuilds a solver."""
 
     measure: ComfortMeasure
@@ -257,7 +257,7 @@ class Comfort(Task):
         return self.measure.rows(body, body.q, p[:n], active, strength, weights)
 
     def effort_weights(self) -> slice:
-        """Where the effort weights c_g lie in :meth:`targets` (an empty slice without effort)."""
+        """Where the effort weights c_g lie in ``targets`` (an empty slice without effort)."""
         n = self.measure.neutral.size
         if not self.measure.effort:
             return slice(n, n)

@@ -120,7 +120,7 @@ def _state(result: SimulationResult, step: int) -> str:
 class _Frames:
     """The animation's figure: for a 3-D body a 3-D view and the side view that shows the
     most motion, for a planar body its plane of motion, a legend beside; the state of the
-    constraint above, a strip of fatigue below; :meth:`draw` shows a step."""
+    constraint above, a strip of fatigue below; ``draw`` shows a step."""
 
     def __init__(self, result: SimulationResult, steps: list[int]) -> None:
         self.result = result
@@ -170,8 +170,8 @@ class _Frames:
 
 
 def write_animation(result: SimulationResult, path: Path) -> Path | None:
-    """Animate the run into ``path`` (.gif or .mp4), at most :data:`MAX_FRAMES` frames at
-    :data:`FPS`. Returns None, leaving no file, for a run without steps or when Ctrl-C
+    """Animate the run into ``path`` (.gif or .mp4), at most ``MAX_FRAMES`` frames at
+    ``FPS``. Returns None, leaving no file, for a run without steps or when Ctrl-C
     (or an earlier one in the same command) stops it between frames."""
     writer = animation.writers[WRITERS[check_format(path.suffix.lstrip(".").lower(), "path")]]
     if result.timeline.time.size == 0 or interrupt.requested():

@@ -26,7 +26,7 @@ NAMES = {
 def axis_keys(axis: str, problem: Any = None) -> list[str]:
     """The problem keys ``axis`` sets (``KEY1,KEY2`` ties them to one value), each a
     dotted key, each once, ``solver`` alone; ``problem`` names the file in the one-line
-    :class:`ProblemError` otherwise."""
+    ``ProblemError`` otherwise."""
     keys = [key.strip() for key in axis.split(",")]
     expected = "KEY or KEY1,KEY2 (keys tied to one value), such as loads[0].mass_kg"
     for key in keys:

@@ -12,9 +12,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from casadi_posture.biomech.low_back import limits as compression_limits
-from casadi_posture.design.answer import Design, SweepPoint
 from casadi_posture.output.axes import axis_label, with_unit
 from casadi_posture.output.saving import save_figure
+from casadi_posture.workplace_design.answer import Design, SweepPoint
 
 #: Points of the one-key sweep over its bounds.
 SWEEP_POINTS = 15

@@ -100,5 +100,5 @@ def postures_3d_figure(result: SimulationResult) -> Figure:
 
 
 def plot_postures_3d(result: SimulationResult, path: Path) -> Path:
-    """:func:`postures_3d_figure` into ``path``."""
+    """``postures_3d_figure`` into ``path``."""
     return save_figure(postures_3d_figure(result), path, tight=False)

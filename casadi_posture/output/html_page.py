@@ -47,7 +47,7 @@ def cell(value: Any) -> str:
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence[Any]], **attributes: str) -> str:
-    """An HTML table of ``rows`` (cells by :func:`cell`) under ``headers``."""
+    """An HTML table of ``rows`` (cells by ``cell``) under ``headers``."""
     extra = "".join(f' {k.rstrip("_")}="{html.escape(v)}"' for k, v in attributes.items())
     head = "".join(f"<th>{html.escape(h)}</th>" for h in headers)
     body = "".join("<tr>" + "".join(f"<td>{cell(v)}</td>" for v in row) + "</tr>" for row in rows)

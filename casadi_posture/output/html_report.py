@@ -6,8 +6,8 @@ the events; a time slider that moves the body and a cursor on the curves togethe
 the summary in words on top.
 
 The page carries plotly.js once, gzip-compressed (the browser inflates it), the posture at
-up to :data:`MAX_FRAMES` moments (every event's among them) as each body frame's
-placement, and numbers to :data:`DIGITS` significant digits, so that a 20-minute run of
+up to ``MAX_FRAMES`` moments (every event's among them) as each body frame's
+placement, and numbers to ``DIGITS`` significant digits, so that a 20-minute run of
 the 29-DOF body stays near 2.5 MB."""
 
 from __future__ import annotations

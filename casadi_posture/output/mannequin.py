@@ -170,7 +170,7 @@ def _ellipsoid(centre: np.ndarray, semi: tuple[float, float, float]) -> np.ndarr
 
 def parts(body: BodyModel) -> list[Part]:
     """The mannequin of a human body, or no parts for a body without the landmarks of
-    :data:`NEEDED` (a planar arm: drawn as a stick figure)."""
+    ``NEEDED`` (a planar arm: drawn as a stick figure)."""
     if not set(NEEDED) <= set(body.landmarks):
         return []
     at = {n: np.asarray(lm.position, dtype=float) for n, lm in body.landmarks.items()}

@@ -67,7 +67,7 @@ DRAWN_MIN_FATIGUE = 0.01
 def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     """Fatigue of every half-joint above 1 % over time with both thresholds (paper Fig. 9):
     a group's right and left sides in one colour, the left dashed (and said so where they
-    coincide); more than :data:`INSIDE_LEGEND` groups get a legend beside the axes."""
+    coincide); more than ``INSIDE_LEGEND`` groups get a legend beside the axes."""
     tl, s = result.timeline, result.settings
     halves = result.problem.body.half_joints
     peak = tl.fatigue.max(axis=0) if tl.fatigue.size else np.zeros(len(halves))
@@ -216,7 +216,7 @@ def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
 
 
 def plot_fatigue_regions(result: SimulationResult, path: Path) -> Path:
-    """:func:`fatigue_regions_figure` into ``path``."""
+    """``fatigue_regions_figure`` into ``path``."""
     return save_figure(fatigue_regions_figure(result), path, tight=False)
 
 

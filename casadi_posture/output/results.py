@@ -204,7 +204,7 @@ def _task(result: SimulationResult) -> dict[str, Any]:
 
 def flags(result: SimulationResult, plausible: dict[str, Any], back: dict[str, Any]) -> list[str]:
     """Why the run's answer cannot be used as it is, one line each (empty: it can);
-    ``plausible`` is the run's :func:`plausibility_report`, ``back`` its ``low_back``."""
+    ``plausible`` is the run's ``plausibility_report``, ``back`` its ``low_back``."""
     tl, out = result.timeline, []
     if result.stop == "interrupted":
         out.append(f"interrupted at {tl.time[-1] if tl.time.size else 0.0:g} s: a partial run")
@@ -387,7 +387,7 @@ def git_commit() -> dict[str, Any] | None:
 
 def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     """The timeline as named columns in the files' units (degrees, N·m, %MVC, s); the
-    header of timeline.csv and the columns of :func:`timeline_frame`. Empty cells
+    header of timeline.csv and the columns of ``timeline_frame``. Empty cells
     (None): no constraint owner, goal or case on that step, no RULA/REBA, compression or
     shear on a rest step."""
     tl, body = result.timeline, result.problem.body

@@ -48,7 +48,7 @@ def static_row(answer: StaticAnswer) -> dict[str, Any]:
 
 
 def simulation_row(result: SimulationResult) -> dict[str, Any]:
-    """The start outcomes (as :func:`static_row`; the shares capable at the first posture,
+    """The start outcomes (as ``static_row``; the shares capable at the first posture,
     None when the run has no step) and what the simulation found: when the
     first group reached the fatigue threshold, which group was exhausted and when, the
     cycles, how long the task was held (a lower bound when the run ended with it held),

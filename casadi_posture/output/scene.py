@@ -313,7 +313,7 @@ class Pose:
     """One posture of the run drawn in one view (2 world axes) or in 3-D (3): the mannequin
     (``solid`` or translucent, in zorder ``layer``) or the bones and joints of a body that
     is not human, centre of mass with its drop line to the floor, support polygon (unless
-    not ``support``) and load arrows, all moved to another step by :meth:`update`."""
+    not ``support``) and load arrows, all moved to another step by ``update``."""
 
     def __init__(
         self,

@@ -86,7 +86,7 @@ def step_scores(result: SimulationResult) -> list[Scores | None]:
 def timeline_columns(
     result: SimulationResult, steps: Sequence[Scores | None]
 ) -> dict[str, list[int | None]]:
-    """``rula_<side>`` and ``reba_<side>`` per step of ``steps`` (:func:`step_scores`;
+    """``rula_<side>`` and ``reba_<side>`` per step of ``steps`` (``step_scores``;
     ``rula``, ``reba`` for a planar arm; none for a body not scored)."""
     scored = next((s for s in steps if s), None)
     if scored is None:
@@ -102,7 +102,7 @@ def timeline_columns(
 def run_report(result: SimulationResult, steps: Sequence[Scores | None]) -> dict[str, Any]:
     """summary.json's ``rula_reba``: the scores and action levels per side at the start,
     each recovery and the end (on a rest step: the last held posture's), the worst over the
-    run with its side and first time [s], and the inputs (:func:`inputs`)."""
+    run with its side and first time [s], and the inputs (``inputs``)."""
     tl, problem = result.timeline, result.problem
     held = [k for k, s in enumerate(steps) if s]
     report: dict[str, Any] = {"postures": [], "worst": None}
@@ -174,7 +174,7 @@ def worst(candidates: Iterable[tuple[float, SideScores]]) -> dict[str, Any] | No
 
 
 def row(highest: dict[str, Any] | None) -> dict[str, Any]:
-    """The worst RULA and REBA (:func:`worst`) as row fields, with their action levels and
+    """The worst RULA and REBA (``worst``) as row fields, with their action levels and
     REBA's risk; None when nothing was scored."""
     if highest is None:
         return dict.fromkeys(ROW_KEYS)
@@ -188,7 +188,7 @@ def row(highest: dict[str, Any] | None) -> dict[str, Any]:
     }
 
 
-#: The row fields of :func:`row`.
+#: The row fields of ``row``.
 ROW_KEYS = (
     "worst_rula",
     "worst_rula_action_level",

@@ -58,7 +58,7 @@ class Skeleton:
     of the body and the ``carried`` point masses (landmark, kg), as the balance counts it),
     and the positions of the landmarks in ``extra`` (loads, effectors) as points too; the
     mannequin's ``parts`` (none for a body that is not human) and the placement of their
-    frames at every step (:meth:`solids`)."""
+    frames at every step (``solids``)."""
 
     def __init__(
         self,

@@ -16,7 +16,7 @@ STEP_PCT = 10.0
 def plot_tornado(rows: list[dict[str, object]], title: str, path: Path, top: int = 15) -> Path:
     """The change of the task's endurance [%] when each of the ``top`` inputs with the largest
     elasticity changes by ±10 % of its value (to first order: ±10 %·elasticity), largest at
-    the top; ``rows`` as :meth:`Sensitivity.ranked` gives them."""
+    the top; ``rows`` as ``Sensitivity.ranked`` gives them."""
     shown = [r for r in rows if r["endurance_elasticity"] is not None][:top][::-1]
     fig, ax = plt.subplots(figsize=(8.5, 0.38 * len(shown) + 1.8))
     up = np.array([STEP_PCT * float(r["endurance_elasticity"]) for r in shown])

@@ -152,7 +152,7 @@ class DutyCycle:
 
 def check_seconds(value: float, key: str, path: object, *, positive: bool) -> float:
     """A time [s] given for the search: finite, and > 0 (``positive``) or ≥ 0; else a
-    :class:`ProblemError` naming ``key``."""
+    ``ProblemError`` naming ``key``."""
     if not (math.isfinite(value) and (value > 0 if positive else value >= 0)):
         raise ProblemError(path, key, value, f"a finite time {'> 0' if positive else '≥ 0'} s")
     return float(value)
@@ -273,7 +273,7 @@ def duty_cycles(
     tolerance_s: float | None = None,
     solver: str | None = None,
 ) -> list[DutyCycle]:
-    """:func:`duty_cycle` for each rest time [s], stopping after one that Ctrl-C cut short."""
+    """``duty_cycle`` for each rest time [s], stopping after one that Ctrl-C cut short."""
     out = []
     for rest in t_off_s:
         out.append(

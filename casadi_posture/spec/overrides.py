@@ -40,7 +40,7 @@ def parse_key(key: str) -> list[str | int]:
 
 def split_assignment(text: str, option: str, path: Any, example: str) -> tuple[str, str]:
     """``KEY=VALUE`` -> (key, value text), the key checked; a malformed one is a
-    :class:`ProblemError` naming the command-line ``option`` and an ``example``."""
+    ``ProblemError`` naming the command-line ``option`` and an ``example``."""
     key, sep, value = text.partition("=")
     if not sep or not key or not value:
         raise ProblemError(path, option, text, example)

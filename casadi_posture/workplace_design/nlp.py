@@ -40,11 +40,11 @@ import numpy as np
 from casadi_posture import static
 from casadi_posture.biomech.endurance import numeric
 from casadi_posture.biomech.low_back import OUTPUTS, low_back_expressions, moment_arms
-from casadi_posture.design.objectives import sex_of
-from casadi_posture.design.quantities import Free
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.problem import Problem
+from casadi_posture.workplace_design.objectives import sex_of
+from casadi_posture.workplace_design.quantities import Free
 
 #: The low-back outputs the compression objective's measures are made of.
 _COMPRESSION_TERMS = ("compression", "sagittal_moment", "muscle_force")

@@ -1,4 +1,4 @@
-"""The answer of a design (:class:`Design`, its gain and ``to_dict``) and the sweep of the
+"""The answer of a design (``Design``, its gain and ``to_dict``) and the sweep of the
 objective over one free quantity's bounds, an independent check of the optimum."""
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ from typing import Any
 from casadi_posture import static
 from casadi_posture.biomech.low_back import MODEL
 from casadi_posture.biomech.low_back import limits as compression_limits
-from casadi_posture.design.objectives import (
+from casadi_posture.problem import Problem, problem_from_data
+from casadi_posture.workplace_design.objectives import (
     CHECK_RELATIVE,
     CHECK_SHARE_PCT,
     COMPRESSION_UNIT,
@@ -19,8 +20,7 @@ from casadi_posture.design.objectives import (
     score,
     score_gain,
 )
-from casadi_posture.design.quantities import Free, as_overrides
-from casadi_posture.problem import Problem, problem_from_data
+from casadi_posture.workplace_design.quantities import Free, as_overrides
 
 #: A design value within this of a bound [m] is reported at that bound.
 BOUND_TOLERANCE_M = 1e-6
@@ -68,7 +68,7 @@ class Design:
 
     @property
     def gain_unit(self) -> str:
-        """The unit of :attr:`gain`."""
+        """The unit of ``gain``."""
         units = {"endurance": "min", "compression": "N"}
         return units.get(self.objective, "percentage points")
 
@@ -77,12 +77,12 @@ class Design:
         """The answer: the IK re-solved at the best design − start [min or percentage
         points] (``inf``: the re-solve is unlimited), or start − re-solved for the
         compression [N] (its reduction). What a person at the design would do, as far as the
-        IK predicts it; :attr:`nlp_gain` is the NLP's own."""
+        IK predicts it; ``nlp_gain`` is the NLP's own."""
         return score_gain(self.start, self.check, self.objective)
 
     @property
     def nlp_gain(self) -> float:
-        """The gain of the NLP's posture at the best design over the start (as :attr:`gain`)."""
+        """The gain of the NLP's posture at the best design over the start (as ``gain``)."""
         return score_gain(self.start, self.best, self.objective)
 
     @property

@@ -13,9 +13,12 @@ import numpy as np
 from casadi_posture import static
 from casadi_posture.biomech.low_back import LUMBAR, has_lumbar_joint
 from casadi_posture.body.loads import pack
-from casadi_posture.design.answer import Design
-from casadi_posture.design.nlp import design_nlp, endurance_threshold
-from casadi_posture.design.objectives import (
+from casadi_posture.errors import CasadiPostureError, ProblemError
+from casadi_posture.ik.result import ACHIEVED_TOLERANCE
+from casadi_posture.problem import Problem, problem_from_data
+from casadi_posture.workplace_design.answer import Design
+from casadi_posture.workplace_design.nlp import design_nlp, endurance_threshold
+from casadi_posture.workplace_design.objectives import (
     OBJECTIVES,
     Score,
     format_score,
@@ -23,10 +26,7 @@ from casadi_posture.design.objectives import (
     score,
     scores_agree,
 )
-from casadi_posture.design.quantities import Free, as_overrides, free_quantities
-from casadi_posture.errors import CasadiPostureError, ProblemError
-from casadi_posture.ik.result import ACHIEVED_TOLERANCE
-from casadi_posture.problem import Problem, problem_from_data
+from casadi_posture.workplace_design.quantities import Free, as_overrides, free_quantities
 
 #: A load at most this far above T_0 [%MVC] counts as clamped (not limiting) at the optimum.
 CLAMP_MARGIN_PCT_MVC = 1e-3
@@ -77,13 +77,13 @@ def design(
     starts: int = 1,
 ) -> Design:
     """Choose the ``free`` quantities ({KEY or KEY1,KEY2: (LO, HI)} [m]) to maximise
-    ``objective`` (one of :data:`OBJECTIVES`; the compression is minimised, with the lumbar
+    ``objective`` (one of ``OBJECTIVES``; the compression is minimised, with the lumbar
     bending and rotation held at the start's) by the design NLP, and check the answer by
     re-solving the IK with the file's solver at the best design. The levels the IK achieves
     at the start are kept as equalities, only the first ``keep_levels`` of them if given
     (a posture task the start happens to achieve would otherwise fix the posture).
     ``starts`` > 1 also starts the NLP from the IK at ``starts − 1`` designs spread over
-    the bounds (:func:`spread`; a local method: the best answer is kept)."""
+    the bounds (``spread``; a local method: the best answer is kept)."""
     if starts < 1:
         raise ProblemError(problem.path, "--starts", starts, "a number of starts ≥ 1")
     if objective not in OBJECTIVES:

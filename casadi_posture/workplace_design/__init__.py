@@ -8,20 +8,20 @@ posture and the design together (docs/design.md).
 - ``objectives``: the objectives, an answer's score on each, and how two scores compare;
 - ``nlp``: the design NLP (its variables, constraints and each objective's measures), its
   cache, the independent rows of the kept levels, the endurance threshold's check;
-- ``answer``: the :class:`Design` answer and the sweep over one free quantity;
-- ``solve``: :func:`design`, the entry point, and the re-solve check of its answer.
+- ``answer``: the ``Design`` answer and the sweep over one free quantity;
+- ``solve``: ``design``, the entry point, and the re-solve check of its answer.
 """
 
 from __future__ import annotations
 
-from casadi_posture.design.answer import BOUND_TOLERANCE_M, Design, SweepPoint, sweep
-from casadi_posture.design.nlp import (
+from casadi_posture.workplace_design.answer import BOUND_TOLERANCE_M, Design, SweepPoint, sweep
+from casadi_posture.workplace_design.nlp import (
     CACHED_STRUCTURES,
     MAX_ITERATIONS,
     design_nlp,
     independent_rows,
 )
-from casadi_posture.design.objectives import (
+from casadi_posture.workplace_design.objectives import (
     CHECK_RELATIVE,
     CHECK_SHARE_PCT,
     COMPRESSION_UNIT,
@@ -29,8 +29,8 @@ from casadi_posture.design.objectives import (
     Score,
     score,
 )
-from casadi_posture.design.quantities import Free, free_quantities, parse_free
-from casadi_posture.design.solve import CLAMP_MARGIN_PCT_MVC, design, spread
+from casadi_posture.workplace_design.quantities import Free, free_quantities, parse_free
+from casadi_posture.workplace_design.solve import CLAMP_MARGIN_PCT_MVC, design, spread
 
 __all__ = [
     "BOUND_TOLERANCE_M",

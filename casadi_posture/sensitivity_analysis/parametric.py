@@ -387,7 +387,7 @@ def _geometry(problem: Problem) -> np.ndarray:
 
 
 def _rebuild(body: BodyModel, values: list[ca.SX]) -> BodyModel:
-    """``body`` with its numbers (the order of :func:`_geometry`) replaced by ``values``."""
+    """``body`` with its numbers (the order of ``_geometry``) replaced by ``values``."""
     it = iter(values)
 
     def take(n: int) -> tuple[ca.SX, ...]:

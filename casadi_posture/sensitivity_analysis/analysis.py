@@ -3,8 +3,8 @@
 
 At the posture the IK solves for (``static.solve``), each half-joint's load [%MVC], each
 limited group's static endurance [s] and the task's (its limiting group's) are expressions of
-the posture and the inputs (:class:`ParametricProblem`); their total derivatives add the
-posture's own change (:func:`posture_derivative`). One compiled call gives every value and
+the posture and the inputs (``ParametricProblem``); their total derivatives add the
+posture's own change (``posture_derivative``). One compiled call gives every value and
 partial derivative. Elasticities ``(dy/dx)·x/y`` make inputs of different units comparable:
 the % change of the outcome per % change of the input.
 """
@@ -21,8 +21,8 @@ import numpy as np
 
 from casadi_posture.biomech.low_back import MODEL
 from casadi_posture.problem import Problem
-from casadi_posture.sensitivity.parametric import Input, ParametricProblem
-from casadi_posture.sensitivity.posture import PostureDerivative, posture_derivative
+from casadi_posture.sensitivity_analysis.parametric import Input, ParametricProblem
+from casadi_posture.sensitivity_analysis.posture import PostureDerivative, posture_derivative
 from casadi_posture.static import StaticAnswer
 from casadi_posture.static import solve as solve_static
 
@@ -97,7 +97,7 @@ class Sensitivity:
 
     def ranked_compression(self, kinds: Sequence[str] = ()) -> list[dict[str, object]]:
         """Every input (of ``kinds``, default all) with the L5/S1 compression's derivative [N
-        per unit] and elasticity, ranked as :meth:`ranked` (none without a lumbar joint)."""
+        per unit] and elasticity, ranked as ``ranked`` (none without a lumbar joint)."""
         if self.compression is None or self.d_compression is None:
             return []
         elasticity = self.elasticity(self.d_compression, self.compression)

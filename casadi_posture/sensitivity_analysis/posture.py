@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture.ik.result import ACTIVE_TOLERANCE
-from casadi_posture.sensitivity.parametric import ParametricProblem
+from casadi_posture.sensitivity_analysis.parametric import ParametricProblem
 
 #: Newton's method on the optimality conditions stops at this ‖F‖ or after this many steps.
 POLISH_TOLERANCE = 1e-12

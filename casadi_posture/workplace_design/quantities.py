@@ -48,7 +48,7 @@ class Free:
 def parse_free(items: Sequence[str], path: Any = None) -> dict[str, tuple[float, float]]:
     """``--free KEY=LO:HI`` options (``KEY1,KEY2=LO:HI`` ties keys to one value) as
     {keys: (LO, HI)} [m]; a malformed option, a bound that is not a finite number, LO ≥ HI
-    or a key given twice is a :class:`ProblemError`."""
+    or a key given twice is a ``ProblemError``."""
     out: dict[str, tuple[float, float]] = {}
     seen: set[str] = set()
     for item in items:
