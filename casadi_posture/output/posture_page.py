@@ -157,9 +157,10 @@ def section(heading: str, content: str, *, closed: bool = False) -> str:
 
 
 def _loads_chart(answer: StaticAnswer) -> go.Figure:
-    """The most loaded half-joints' load [%MVC] at the answer, the strength (100 %MVC)
-    drawn; the hover gives torque, strength and endurance."""
-    groups = sorted(answer.groups, key=lambda g: -g.load_pct_mvc)[:LOADED][::-1]
+    """The most loaded half-joints' load [%MVC] at the answer (none that carries nothing),
+    the strength (100 %MVC) drawn; the hover gives torque, strength and endurance."""
+    loaded = [g for g in answer.groups if g.load_pct_mvc > 0]
+    groups = sorted(loaded, key=lambda g: -g.load_pct_mvc)[:LOADED][::-1]
     hover = [
         f"{g.name}: {g.torque:.1f} of {g.strength:.1f} N·m, endurance {minutes(g.endurance_min)}"
         for g in groups
@@ -171,12 +172,17 @@ def _loads_chart(answer: StaticAnswer) -> go.Figure:
             orientation="h", marker_color=colours, hovertext=hover, hoverinfo="text",
         )
     )  # fmt: skip
+    heading = (
+        f"the {len(groups)} most loaded muscle groups"
+        if groups
+        else "no muscle group carries a load"
+    )
     figure.add_vline(x=100, line={"dash": "dash", "color": "#d62728", "width": 1})
     top = max([100.0, *(g.load_pct_mvc for g in groups)])
     figure.update_layout(
         template="plotly_white", height=60 + 26 * len(groups), font={"size": 11},
         margin={"l": 10, "r": 10, "t": 30, "b": 40},
-        title={"text": f"the {len(groups)} most loaded muscle groups", "font": {"size": 12}},
+        title={"text": heading, "font": {"size": 12}},
         xaxis={"title": {"text": "load (%MVC; 100 = strength)"}, "range": [0, 1.05 * top]},
         yaxis={"automargin": True},
     )  # fmt: skip
