@@ -30,6 +30,7 @@ from casadi_posture.biomech.strength import (
     Strength,
     TabulatedStrength,
     default_strength,
+    elbow_flexion,
     known_groups,
 )
 from casadi_posture.biomech.torques import TorqueModel
@@ -238,7 +239,9 @@ def resolve(spec: ProblemSpec, path: Path) -> Problem:
             group_key = (
                 f"{key}.{side}" if spec.body.tree is not None else f"body.half_joints.{group.name}"
             )
-            strength[group.name], record = _strength(group, group_key, body, spec, path)
+            strength[group.name], record = _strength(
+                group, group_key, body, body.index[dof.name], spec, path
+            )
             records.append(record)
 
     loads = tuple(_load(body, spec, i, path) for i in range(len(spec.loads)))
@@ -321,6 +324,8 @@ def _builtin_tree(spec: ProblemSpec, path: Path) -> tuple[TreeSpec, list[Paramet
                     update={
                         "strength_Nm": given.strength_Nm,
                         "strength_curve": given.strength_curve,
+                        "strength_scale": given.strength_scale,
+                        "strength_ratio": given.strength_ratio,
                     }
                 )
         dofs.append(dof.model_copy(update=changes))
@@ -508,10 +513,16 @@ def _derived(dof: str, model: ExponentialPassive) -> list[Parameter]:
 
 
 def _strength(
-    group: TreeHalfJointSpec, key: str, body: BodyModel, spec: ProblemSpec, path: Path
+    group: TreeHalfJointSpec,
+    key: str,
+    body: BodyModel,
+    dof_index: int,
+    spec: ProblemSpec,
+    path: Path,
 ) -> tuple[Strength, Parameter]:
-    """The strength of a muscle group: the file's value or curve, else the shipped default of
-    a group of that name."""
+    """The strength of a muscle group (of the DOF ``dof_index`` in q): the file's value,
+    curve or ratio to the body's elbow flexion, else the shipped default of a group of that
+    name, times the file's ``strength_scale`` if it gives one."""
     where = f"{path} {key}"
     name = group.name
     if group.strength_Nm is not None:
@@ -525,13 +536,39 @@ def _strength(
         )
         table = list(zip(curve.angle_deg, curve.strength_Nm, strict=True))
         return model, Parameter(f"strength.{name}", table, "[deg, N·m]", where, "user")
-    if data_name(name) not in known_groups():
-        expected = f"a strength_Nm or strength_curve (shipped defaults only for {known_groups()})"
-        raise ProblemError(path, f"{key}.strength_Nm", MISSING, expected)
     b = spec.body
-    return default_strength(
-        name, sex=b.sex, stature=b.stature_m, body_mass=b.mass_kg, age=b.age_years
+    if group.strength_ratio is not None:
+        elbow, words = elbow_flexion(b.sex, b.stature_m, b.mass_kg, b.age_years)
+        value = elbow * group.strength_ratio
+        source = f"{where}.strength_ratio = {group.strength_ratio:g} × {words} = {value:.2f} N·m"
+        return ConstantStrength(value), Parameter(
+            f"strength.{name}", round(value, 4), "N·m", source, "user"
+        )
+    if data_name(name) not in known_groups():
+        expected = (
+            "a strength_Nm, strength_curve or strength_ratio (shipped defaults only for "
+            f"{known_groups()})"
+        )
+        raise ProblemError(path, f"{key}.strength_Nm", MISSING, expected)
+    model, record = default_strength(
+        name,
+        sex=b.sex,
+        stature=b.stature_m,
+        body_mass=b.mass_kg,
+        age=b.age_years,
+        dof_index=dof_index,
     )
+    if group.strength_scale is None:
+        return model, record
+    scale = group.strength_scale
+    scaled = replace(model, value=model.value * scale)
+    shown = (
+        round(record.value * scale, 4)
+        if isinstance(record.value, float)
+        else [(a, round(v * scale, 4)) for a, v in record.value]
+    )
+    source = f"{path} {key}.strength_scale = {scale:g} × the default ({record.source})"
+    return scaled, replace(record, value=shown, source=source, status="user", evidence="")
 
 
 def _load(body: BodyModel, spec: ProblemSpec, i: int, path: Path) -> Load:

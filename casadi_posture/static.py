@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -447,16 +447,34 @@ def low_back(problem: Problem, q: Sequence[float]) -> LowBack | None:
     return None if model is None else model.evaluate(q)
 
 
+#: The keys that set a group's strength outright (strength_scale scales the default).
+ABSOLUTE_STRENGTH_KEYS = ("strength_Nm", "strength_curve", "strength_ratio")
+
+
 def population_strength(
     problem: Problem, strength: Sequence[float]
 ) -> tuple[PopulationStrength, ...]:
     """The population strength of every half-joint of ``problem`` (``body.half_joints`` order)
     at its body's stature, mass and age; ``strength`` [N·m] the problem's own at the posture
     considered, the mean of a group whose strength the file sets."""
+    absolute = {
+        name
+        for name, group in _file_groups(problem).items()
+        if any(getattr(group, k) is not None for k in ABSOLUTE_STRENGTH_KEYS)
+    }
     own = {
         p.name.removeprefix("strength."): p.source
         for p in problem.parameters
-        if p.name.startswith("strength.") and p.status == "user"
+        if p.name.removeprefix("strength.") in absolute
     }
     groups = [h.name for h in problem.body.half_joints]
     return population(problem.spec.body, groups, own, strength)
+
+
+def _file_groups(problem: Problem) -> dict[str, Any]:
+    """The muscle groups the problem file describes, by name (``body.half_joints`` or the
+    sides of ``body.tree``'s DOFs)."""
+    body = problem.spec.body
+    if body.tree is None:
+        return dict(body.half_joints)
+    return {g.name: g for dof in body.tree.dofs for g in (dof.positive, dof.negative)}

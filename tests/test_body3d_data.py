@@ -275,6 +275,43 @@ def test_gymnast_ratio_groups_by_hand(group: str, body: dict) -> None:
     assert f"× ratio {ratio:g}" in record.source and "elite" in record.source
 
 
+#: Published strengths [N·m] of men at angles [deg] of the group's own DOF, away from the
+#: curve's knots (within a knot's ±3° rounding they are within 1.1 %): the shoulder flexors
+#: 89.9 at 0° and 68.6 at 45° (KIN-COM, young men), the line on to 90° and held.
+PUBLISHED_CURVES = {
+    "shoulder_flexors": {-30.0: 89.9, 22.5: (89.9 + 68.6) / 2, 67.5: (68.6 + 47.3) / 2, 150: 47.3},
+}
+
+
+def _at(model, angle_deg: float) -> float:
+    q = ca.SX.sym("q", model.dof_index + 1)
+    value = ca.Function("st", [q], [model.expression(q)])
+    return float(value(np.full(model.dof_index + 1, math.radians(angle_deg))))
+
+
+@pytest.mark.parametrize("group", sorted(PUBLISHED_CURVES))
+def test_curve_groups_give_the_published_strengths(group: str) -> None:
+    """The reference man at 25 y (the curves' anchor: Harbo elbow flexion 48.48 N·m) has the
+    published values; others scale with their own Harbo elbow flexion."""
+    young = {**MALE, "age": 25.0}
+    model, record = default_strength(group, **young)
+    for angle, published in PUBLISHED_CURVES[group].items():
+        assert _at(model, angle) == pytest.approx(published, rel=2e-3), angle
+    assert record.unit == "[deg, N·m]" and "comfort measure divides by" in record.source
+    woman, _ = default_strength(group, **FEMALE)
+    scale = _harbo("elbow_flexion_isometric", FEMALE) / _harbo("elbow_flexion_isometric", young)
+    for angle, published in PUBLISHED_CURVES[group].items():
+        assert _at(woman, angle) == pytest.approx(published * scale, rel=2e-3), angle
+
+
+def test_the_comfort_measure_divides_by_the_ratio_it_was_set_with() -> None:
+    """0.899 × Harbo elbow flexion, posture-independent: 43.0 N·m for the reference man at
+    30 y, 26.75 N·m for the reference woman (the earlier constant strength)."""
+    for body, expected in ((MALE, 43.000968), (FEMALE, 26.751543)):
+        model, _ = default_strength("shoulder_flexors", **body)
+        assert float(model.reference) == pytest.approx(expected, rel=1e-6)
+
+
 @pytest.mark.parametrize("body", [MALE, FEMALE], ids=["male", "female"])
 @pytest.mark.parametrize("group", sorted(ESTIMATE))
 def test_estimated_groups(group: str, body: dict) -> None:
@@ -450,7 +487,6 @@ def test_a_dof_of_ones_own_keeps_the_limit_torque_at_its_range() -> None:
 OLD_STRENGTHS = {
     "elbow_flexors": [47.832, 29.757, 53.3, 23.4],
     "elbow_extensors": [32.956247999999995, 20.502572999999998, 36.723699999999994, 16.1226],
-    "shoulder_flexors": [43.000968, 26.751543, 47.9167, 21.0366],
     "shoulder_extensors": [60.124824, 37.404548999999996, 66.9981, 29.413799999999995],
 }
 OLD_BODIES = [
@@ -555,3 +591,45 @@ def test_the_two_old_dofs_are_unchanged(dof: str) -> None:
     assert records[f"joints.{dof}.range.lower"].value == lower
     assert records[f"joints.{dof}.range.upper"].value == upper
     assert records[f"joints.{dof}.range.lower"].evidence == "C1"
+
+
+@pytest.mark.parametrize("body", [MALE, FEMALE, OLDER], ids=["male", "female", "older"])
+def test_a_strength_ratio_is_that_times_the_body_s_elbow_flexion(body: dict) -> None:
+    """``strength_ratio = 0.899`` (the paper's files): 0.899 × Harbo elbow flexion of the
+    body's sex, stature, mass and age, posture-independent; a scale multiplies the curve."""
+    sets = {
+        "body.sex": body["sex"],
+        "body.stature_m": body["stature"],
+        "body.mass_kg": body["body_mass"],
+        "body.age_years": body["age"],
+    }
+    arm = load_problem(PROBLEMS / "holding_m45.toml", overrides=sets)
+    expected = 0.899 * _harbo("elbow_flexion_isometric", body)
+    assert arm.strength["shoulder_flexors"].value == pytest.approx(expected, rel=1e-12)
+    record = next(p for p in arm.parameters if p.name == "strength.shoulder_flexors")
+    assert record.status == "user" and "strength_ratio = 0.899" in record.source
+    scaled = load_problem(
+        PROBLEMS / "standing_wall_horizontal.toml",
+        overrides={**sets, "body.half_joints.shoulder_flexors_r.strength_scale": 0.5},
+    )
+    default, _ = default_strength("shoulder_flexors", **body)
+    assert scaled.strength["shoulder_flexors_r"].value == pytest.approx(0.5 * default.value)
+
+
+def test_a_group_takes_one_strength_key() -> None:
+    sets = {
+        "body.half_joints.shoulder_flexors.strength_ratio": 1.0,
+        "body.half_joints.shoulder_flexors.strength_Nm": 40.0,
+    }
+    with pytest.raises(ProblemError, match="one of strength_Nm"):
+        load_problem(PROBLEMS / "holding_m45.toml", overrides=sets)
+
+
+def test_setting_one_strength_key_replaces_the_file_s_other() -> None:
+    """holding_m45.toml sets strength_ratio; --set ...strength_Nm=30 (a what-if over the
+    strength) takes its place instead of being refused as a second key."""
+    arm = load_problem(
+        PROBLEMS / "holding_m45.toml", {"body.half_joints.shoulder_flexors.strength_Nm": 30.0}
+    )
+    assert arm.strength["shoulder_flexors"].value == 30.0
+    assert arm.spec.body.half_joints["shoulder_flexors"].strength_ratio is None

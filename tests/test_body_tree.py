@@ -27,6 +27,8 @@ def _as_tree(name: str) -> tuple[dict[str, Any], dict[str, Any]]:
     dofs = copy.deepcopy(described["dofs"])
     for dof in dofs:
         for side in ("positive", "negative"):
+            for key in ("strength_ratio", "strength_scale", "strength_curve"):
+                dof[side].pop(key, None)  # the group's strength, written out as a value
             dof[side]["strength_Nm"] = problem.strength[dof[side]["name"]].value
     tree = {"name": "my_arm", "dofs": dofs}
     tree |= {k: described[k] for k in ("segments", "landmarks")}

@@ -23,7 +23,10 @@ G = 9.81
 #: Harbo et al. 2012 elbow flexion, male: intercept, age, stature [m], mass [kg]; the Gymnast
 #: shoulder-flexion ratio; our population CV (an estimate).
 HARBO_MALE, HARBO_FEMALE = (-23.8, -0.13, 22.0, 0.51), (6.9, -0.13, 9.0, 0.18)
-SHOULDER_FLEXION_RATIO, CV = 0.899, 0.28
+#: The shoulder flexors' ratio to Harbo elbow flexion at 0° (89.9 / 48.48 N·m), the curve's
+#: fraction at 60° of flexion (on the straight line 1 → 0.7631 → 0.5261 at 0°, 45°, 90°) and
+#: the estimated CV.
+SHOULDER_FLEXION_RATIO, AT_60_DEG, CV = 1.8544, 0.7631 + (0.5261 - 0.7631) / 3, 0.28
 
 
 def _above(mean: float, sd: float, required: float) -> float:
@@ -65,16 +68,20 @@ def test_anderson_group_by_hand(standing: cp.StaticAnswer) -> None:
 
 
 def test_cv_estimate_group_by_hand(standing: cp.StaticAnswer) -> None:
-    """Right shoulder flexors: Harbo elbow flexion of each sex at the male body's size × the
-    Gymnast ratio, SD = 0.28 × mean (our estimate)."""
+    """Right shoulder flexors at 60° of flexion: Harbo elbow flexion of each sex at the male
+    body's size × the ratio × the curve's fraction there, SD = 0.28 × mean (our
+    estimate)."""
     body = standing.problem.spec.body
     size = (body.age_years, body.stature_m, body.mass_kg)
     group = _group(standing, "shoulder_flexors_r")
     tau = group["torque_Nm"]
     for sex, coefficients in (("male", HARBO_MALE), ("female", HARBO_FEMALE)):
-        mean = _harbo(coefficients, *size) * SHOULDER_FLEXION_RATIO
-        assert group[f"mean_{sex}_Nm"] == pytest.approx(mean, rel=1e-12)
-        assert group[f"capable_{sex}_pct"] == pytest.approx(_above(mean, CV * mean, tau), abs=1e-9)
+        mean = _harbo(coefficients, *size) * SHOULDER_FLEXION_RATIO * AT_60_DEG
+        assert group[f"mean_{sex}_Nm"] == pytest.approx(mean, rel=1e-4)
+        shown = group[f"mean_{sex}_Nm"]
+        assert group[f"capable_{sex}_pct"] == pytest.approx(
+            _above(shown, CV * shown, tau), abs=1e-9
+        )
     assert group["sd_status"] == "estimate" and "CV 0.28" in group["sd_source"]
 
 
@@ -121,18 +128,25 @@ def test_task_share_is_the_weakest_group(standing: cp.StaticAnswer) -> None:
     assert unloaded and all(g["capable_male_pct"] == 100.0 for g in unloaded)
 
 
-def test_a_file_set_strength_is_the_mean_of_both_sexes() -> None:
+def test_a_file_set_strength_is_the_body_s_sex_and_scales_to_the_other() -> None:
+    """The file's 30 N·m is the mean of the body's sex (men); women's is 30 × the ratio of
+    the sexes' Harbo elbow flexion at the body's size (the shipped defaults' ratio)."""
     problem = cp.load(
         PROBLEMS / "holding_m45.toml", {"body.half_joints.shoulder_flexors.strength_Nm": 30.0}
     )
+    body = problem.spec.body
+    size = (body.age_years, body.stature_m, body.mass_kg)
     answer = cp.torques(problem)
     group = _group(answer, "shoulder_flexors")
     tau = group["torque_Nm"]
-    for sex in SEXES:
-        assert group[f"mean_{sex}_Nm"] == 30.0 and group[f"sd_{sex}_Nm"] == pytest.approx(8.4)
-        assert group[f"capable_{sex}_pct"] == pytest.approx(_above(30.0, 8.4, tau), abs=1e-9)
-    assert "problem's own strength" in group["mean_source"]
-    assert "shipped default" in _group(answer, "elbow_flexors")["mean_source"]
+    women = 30.0 * _harbo(HARBO_FEMALE, *size) / _harbo(HARBO_MALE, *size)
+    for sex, mean in (("male", 30.0), ("female", women)):
+        assert group[f"mean_{sex}_Nm"] == pytest.approx(mean, rel=1e-12)
+        assert group[f"sd_{sex}_Nm"] == pytest.approx(CV * mean, rel=1e-12)
+        assert group[f"capable_{sex}_pct"] == pytest.approx(_above(mean, CV * mean, tau), abs=1e-9)
+    assert "body.half_joints.shoulder_flexors" in group["mean_source"]
+    assert "the other sex by the ratio" in group["mean_source"]
+    assert "strength.toml" in _group(answer, "elbow_flexors")["mean_source"]
 
 
 def test_share_capable_on_floats_arrays_and_casadi() -> None:

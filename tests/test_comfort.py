@@ -142,7 +142,7 @@ def test_the_whole_body_adjustment_at_the_wall() -> None:
     """The 0° wall hold: at the threshold the shoulder flexors' load is lowered with the wrist
     kept on the line (levels 1-2) and the dot given up; both solvers give the same events at
     the same seconds and no step falls back."""
-    problem = cp.load(PROBLEMS / "standing_wall_horizontal.toml", {"simulation.duration_s": 200.0})
+    problem = cp.load(PROBLEMS / "standing_wall_horizontal.toml", {"simulation.duration_s": 300.0})
     runs = {s: cp.simulate(problem, s).result for s in ("nullspace", "lexicographic")}
     events = {s: [(e.time_s, e.kind, e.half_joint) for e in r.events] for s, r in runs.items()}
     assert events["nullspace"] == events["lexicographic"]

@@ -25,9 +25,9 @@ from tests.browser import mesh_of, open_page, pixels_of
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 
-#: The standing wall hold for 120 s: the right shoulder flexors reach the fatigue
-#: threshold at 80 s and the constraint takes over (two events), so the posture moves.
-STANDING = {"simulation.duration_s": 120.0}
+#: The standing wall hold for 300 s: the right shoulder flexors reach the fatigue
+#: threshold at 244 s and the constraint takes over (two events), so the posture moves.
+STANDING = {"simulation.duration_s": 300.0}
 
 
 @pytest.fixture(scope="module")
@@ -164,10 +164,10 @@ def test_an_interrupted_run_gets_a_report_of_its_steps(
 
 @pytest.mark.slow
 def test_a_20_minute_standing_report_is_under_5_mb(tmp_path: Path) -> None:
-    """The 29-DOF body at the wall with 1 kg for 20 min: 1201 steps, three cycles."""
-    sets = {"simulation.duration_s": 1200.0, "loads[0].mass_kg": 1.0}
+    """The 29-DOF body at the wall with 1.6 kg for 20 min: 1201 steps, two cycles."""
+    sets = {"simulation.duration_s": 1200.0, "loads[0].mass_kg": 1.6}
     run = api.simulate(api.load(PROBLEMS / "standing_wall_horizontal.toml", sets))
-    assert run.result.timeline.time.size == 1201 and run.summary()["fatigue_recovery_cycles"] >= 3
+    assert run.result.timeline.time.size == 1201 and run.summary()["fatigue_recovery_cycles"] >= 2
     start = time.perf_counter()
     path = write_report(run.result, tmp_path / "report.html")
     took = time.perf_counter() - start

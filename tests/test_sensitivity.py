@@ -139,7 +139,7 @@ def test_the_standing_body_against_finite_differences() -> None:
         "tasks[4].target_m[0]",
         "tasks[2].reference_deg.lumbar_rotation",
         "posture_deg.shoulder_flexion_r",
-        "body.half_joints.shoulder_flexors_r.strength_Nm",
+        "body.half_joints.shoulder_flexors_r.strength_scale",
         "joints.shoulder_flexion_r.passive.k3",
         "endurance.frey_law_avin.shoulder.b1",
     ]
@@ -167,7 +167,8 @@ def test_the_seat_height_of_the_upper_body_against_finite_differences() -> None:
 
 def test_elasticities_of_manenica_have_closed_forms() -> None:
     """E = 60·exp(a − b·T) with T = 100·τ/st and τ not depending on a, b or st: the elasticity
-    is a for a, −b·T for b, and b·T for the limiting group's strength."""
+    is a for a, −b·T for b, and b·T for the limiting group's strength (here its ratio to the
+    body's elbow flexion, in proportion to it)."""
     result = sensitivity(cp.load("problems/holding_horizontal.toml"))
     rows = {r["key"]: r for r in result.ranked()}
     load = result.load_pct_mvc[result.groups.index("shoulder_flexors")]
@@ -175,7 +176,7 @@ def test_elasticities_of_manenica_have_closed_forms() -> None:
     b = rows["endurance.manenica.b"]
     assert a["endurance_elasticity"] == pytest.approx(a["value"], rel=1e-12)
     assert b["endurance_elasticity"] == pytest.approx(-b["value"] * load, rel=1e-12)
-    strength = rows["body.half_joints.shoulder_flexors.strength_Nm"]
+    strength = rows["body.half_joints.shoulder_flexors.strength_ratio"]
     assert strength["endurance_elasticity"] == pytest.approx(b["value"] * load, rel=1e-10)
     assert strength["load_elasticity"] == pytest.approx(-1.0, rel=1e-10)
     assert rows["loads[0].force_N[0]"]["endurance_elasticity"] is None  # the input is 0

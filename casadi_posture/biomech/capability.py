@@ -9,12 +9,13 @@ exert the group's required torque τ_g [N·m] is
 and the task's share for a sex is that of its weakest group, min_g P_{g,s}. A group that
 carries nothing (τ_g = 0) counts as 100 %.
 
-Means: the shipped default strength of the group's name for each sex at the problem's
-stature, mass and age (``default_strength``). A group whose strength the problem file sets
-(``strength_Nm``, ``strength_curve``) takes the problem's strength as the mean for both
-sexes. SDs: σ = CV × μ, with CV the c1_sd / c1 of Anderson et al. 2007 pooled over its young and
-middle-aged rows for hip, knee and ankle flexion/extension (a measured spread), else the
-estimate ``strength.population_cv`` (``strength.toml``).
+Means: for the body's sex the problem's strength of the group at the posture considered
+(the shipped default, possibly posture-dependent, or what the file sets); for the other
+sex that times the ratio of the two sexes' shipped defaults at the problem's stature, mass
+and age (``default_strength``). A group without a shipped default takes the same mean for
+both sexes. SDs: σ = CV × μ, with CV the c1_sd / c1 of Anderson et al. 2007 pooled over its
+young and middle-aged rows for hip, knee and ankle flexion/extension (a measured spread),
+else the estimate ``strength.population_cv`` (``strength.toml``).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from typing import Any, Literal
 import casadi as ca
 import numpy as np
 
-from casadi_posture.biomech.strength import anderson_young, default_strength
+from casadi_posture.biomech.strength import anderson_young, default_strength, known_groups
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import data_name
 from casadi_posture.spec.schema import BodySpec
@@ -167,17 +168,20 @@ def population(
     strength: Sequence[float],
 ) -> tuple[PopulationStrength, ...]:
     """The population strength of every half-joint in ``groups`` of a body described by
-    ``body`` (sex ignored: both sexes at its stature, mass and age). ``strength`` [N·m] is the
-    problem's own strength of each group at the posture considered (``Torques.strength``): the
-    mean of a group whose strength the file sets (``own``: group -> where it is set)."""
+    ``body`` (both sexes at its stature, mass and age). ``strength`` [N·m] is the problem's
+    own strength of each group at the posture considered (``Torques.strength``): the mean of
+    the body's sex. The other sex's mean is it times the ratio of the two sexes' shipped
+    defaults (their values, posture-free: a curve's scale), also for a group whose strength
+    the file sets (``own``: group -> where it is set); a group without a shipped default
+    takes the same mean for both sexes."""
     out = []
+    known = set(known_groups())
     for k, name in enumerate(groups):
         cv, sd_source, sd_status = _spread(data_name(name))
-        if name in own:
-            mean = dict.fromkeys(SEXES, float(strength[k]))
-            source = f"the problem's own strength, for both sexes ({own[name]})"
-        else:
-            mean = {
+        given = float(strength[k])
+        where = f" ({own[name]})" if name in own else " (strength.toml)"
+        if data_name(name) in known:
+            value = {
                 sex: default_strength(
                     name,
                     sex=sex,
@@ -187,10 +191,15 @@ def population(
                 )[0].value
                 for sex in SEXES
             }
+            mean = {sex: given * value[sex] / value[body.sex] for sex in SEXES}
             source = (
-                f"shipped default strength of each sex at {body.stature_m:g} m, "
-                f"{body.mass_kg:g} kg, {body.age_years:g} y (strength.toml)"
+                f"the problem's strength at the posture for {PEOPLE[body.sex]}{where}, the "
+                f"other sex by the ratio of the shipped defaults at {body.stature_m:g} m, "
+                f"{body.mass_kg:g} kg, {body.age_years:g} y"
             )
+        else:
+            mean = dict.fromkeys(SEXES, given)
+            source = f"the problem's own strength, for both sexes{where}"
         sd = {sex: cv[sex] * mean[sex] for sex in SEXES}
         out.append(PopulationStrength(name, mean, sd, source, sd_source, sd_status))
     return tuple(out)

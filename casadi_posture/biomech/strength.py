@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import casadi as ca
+import numpy as np
 
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import Parameter, data_name
@@ -17,6 +18,16 @@ class Strength(Protocol):
     """st(q) [N·m] of one half-joint, an expression of the whole joint vector q [rad]."""
 
     def expression(self, q: ca.SX) -> ca.SX: ...
+
+
+def comfort_strength(model: Strength, q: ca.SX) -> ca.SX:
+    """The strength [N·m] the comfort measure's effort row divides by: a shipped curve's
+    constant reference value (``ScaledCurveStrength.reference``), so that the curve
+    changes the loads (%MVC) and the fatigue but not the balance of the comfort measure's
+    terms; any other model's own st(q)."""
+    if isinstance(model, ScaledCurveStrength):
+        return ca.SX(model.reference)
+    return model.expression(q)
 
 
 @dataclass(frozen=True)
@@ -46,14 +57,61 @@ class TabulatedStrength:
         return ca.pw_lin(angle, ca.DM(self.angles), ca.DM(self.values))
 
 
+#: Half-width [rad] over which a shipped curve's knots are rounded (3°).
+KNOT_ROUNDING_RAD = math.radians(3.0)
+
+
+@dataclass(frozen=True)
+class ScaledCurveStrength:
+    """A strength [N·m] that depends on one DOF's angle: ``value`` [N·m] (the strength at
+    the first angle, a float or an expression) times a relative curve through
+    (``angles`` [rad], ``fractions`` [-]), linear between them and held beyond, its knots
+    rounded over about ±``KNOT_ROUNDING_RAD``: a sum of softplus hinges, exact away from the
+    knots and within ln 2 · w · |change of slope| of the lines at a knot (1.1 % of the
+    shoulder flexors' value), smooth so that the IK's comfort level, which weighs loads by
+    strength, has derivatives everywhere. The shipped posture-dependent defaults
+    (``ratio_curve`` in strength.toml)."""
+
+    value: float | ca.SX
+    dof_index: int
+    angles: tuple[float, ...]
+    fractions: tuple[float, ...]
+    #: The curve's fraction [-] at the angle whose strength the comfort measure uses.
+    comfort_fraction: float = 1.0
+
+    @property
+    def reference(self) -> float | ca.SX:
+        """The constant strength [N·m] the comfort measure divides by: ``value`` times
+        ``comfort_fraction``."""
+        return self.value * self.comfort_fraction
+
+    def shape(self, angle: ca.SX) -> ca.SX:
+        """The relative curve [-] at ``angle`` [rad]."""
+        slopes = [
+            (f1 - f0) / (a1 - a0)
+            for a0, a1, f0, f1 in zip(
+                self.angles, self.angles[1:], self.fractions, self.fractions[1:], strict=False
+            )
+        ]
+        changes = np.diff([0.0, *slopes, 0.0])
+        w = KNOT_ROUNDING_RAD
+        out = ca.SX(self.fractions[0])
+        for knot, change in zip(self.angles, changes, strict=True):
+            out += change * w * ca.log1p(ca.exp((angle - knot) / w))
+        return out
+
+    def expression(self, q: ca.SX) -> ca.SX:
+        return self.value * self.shape(q[self.dof_index])
+
+
 #: The strength tables of ``strength.toml`` that hold groups, in the order they are tried.
 _GROUP_TABLES = ("ratio", "harbo_2012_groups", "anderson_2007", "estimate")
 _HARBO_KEYS = ("intercept", "age", "stature", "body_mass")
 
 
 def default_strength(
-    half_joint: str, *, sex: str, stature: float, body_mass: float, age: float
-) -> tuple[ConstantStrength, Parameter]:
+    half_joint: str, *, sex: str, stature: float, body_mass: float, age: float, dof_index: int = 0
+) -> tuple[ConstantStrength | ScaledCurveStrength, Parameter]:
     """The default strength of a half-joint (docs/sources.md) and its provenance.
 
     ``half_joint`` may carry a side suffix (``shoulder_abductors_r``): the data of the name
@@ -61,19 +119,18 @@ def default_strength(
     the elbow flexors from the Harbo et al. 2012 regression at this stature [m], body mass
     [kg] and age [years] times the group's Gymnast strength ratio; the group's own Harbo
     regression; Anderson et al. 2007 young adults' c1·m·g·h of the sex (``anderson_young``)
-    or our estimate c·m·g·h, both times ``age_factor``. The record's source shows the
-    computation.
+    or our estimate c·m·g·h, both times ``age_factor``. A group with a ``ratio_curve``
+    depends on the angle of its own DOF, ``dof_index`` in q (``ScaledCurveStrength``;
+    its ``value`` is the strength at the curve's first angle). The record's source shows the
+    computation; a curve's record holds its (angle [deg], strength [N·m]) points.
     """
     group = data_name(half_joint)
     table = parameters.load("strength")
     if f"strength.ratio.{group}" in table:
         ratio = table[f"strength.ratio.{group}"]
-        elbow_flexors = _harbo("harbo_2012", sex, stature, body_mass, age)[0]
+        elbow_flexors, elbow = elbow_flexion(sex, stature, body_mass, age)
         value = elbow_flexors * ratio.value
-        source = (
-            f"Harbo 2012 elbow-flexion regression ({sex}, {age:g} y, {stature:g} m, "
-            f"{body_mass:g} kg) = {elbow_flexors:.2f} N·m × ratio {ratio.value:g} ({ratio.source})"
-        )
+        source = f"{elbow} × ratio {ratio.value:g} ({ratio.source})"
         evidence = "C1+E"
     elif f"strength.harbo_2012_groups.{group}.{sex}.intercept" in table:
         value, c, record = _harbo(f"harbo_2012_groups.{group}", sex, stature, body_mass, age)
@@ -104,6 +161,33 @@ def default_strength(
             f"{stature:g} m × {factor:.4f} = {value:.2f} N·m ({record.source}; {rule})"
         )
         evidence = record.evidence
+    if f"strength.ratio_curve.{group}.angle_deg" in table:
+        angles = table[f"strength.ratio_curve.{group}.angle_deg"]
+        fractions = table[f"strength.ratio_curve.{group}.fraction"]
+
+        points = [
+            (a, round(value * f, 4)) for a, f in zip(angles.value, fractions.value, strict=True)
+        ]
+        source += (
+            f"; at the angles {angles.value} deg of its DOF × {fractions.value}: "
+            f"{', '.join(f'{n:.2f} N·m' for _, n in points)} ({angles.source})"
+        )
+        comfort = table[f"strength.ratio_curve.{group}.comfort_ratio"].value
+        comfort_fraction = comfort / ratio.value
+        source += (
+            f"; the comfort measure divides by a constant {value * comfort_fraction:.2f} N·m "
+            f"(ratio {comfort:g})"
+        )
+        curve = ScaledCurveStrength(
+            value,
+            dof_index,
+            tuple(math.radians(a) for a in angles.value),
+            tuple(fractions.value),
+            comfort_fraction,
+        )
+        return curve, Parameter(
+            f"strength.{half_joint}", points, "[deg, N·m]", source, "estimate", evidence
+        )
     record = Parameter(
         name=f"strength.{half_joint}",
         value=round(value, 4),
@@ -113,6 +197,18 @@ def default_strength(
         evidence=evidence,
     )
     return ConstantStrength(value), record
+
+
+def elbow_flexion(sex: str, stature: float, body_mass: float, age: float) -> tuple[float, str]:
+    """The body's isometric elbow-flexion strength [N·m], the Harbo et al. 2012 regression of
+    ``sex`` at ``stature`` [m], ``body_mass`` [kg] and ``age`` [years] that the ratio groups
+    scale, and the computation in words."""
+    value = _harbo("harbo_2012", sex, stature, body_mass, age)[0]
+    words = (
+        f"Harbo 2012 elbow-flexion regression ({sex}, {age:g} y, {stature:g} m, "
+        f"{body_mass:g} kg) = {value:.2f} N·m"
+    )
+    return value, words
 
 
 def _harbo(

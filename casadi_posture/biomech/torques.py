@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture.biomech.passive import PassiveTorque
-from casadi_posture.biomech.strength import Strength
+from casadi_posture.biomech.strength import Strength, comfort_strength
 from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
 from casadi_posture.body.support import carried_foot, floor_pressure, reaction_torque
 from casadi_posture.body.tree import BodyModel
@@ -112,6 +112,12 @@ def torque_expressions(
     tau_pas = ca.vertcat(*[passive[d.name].expression(q[i]) for i, d in enumerate(body.dofs)])
     st = ca.vertcat(*[strength[h.name].expression(q) for h in body.half_joints])
     return tau_ext, tau_pas, -(tau_pas + tau_ext), st
+
+
+def comfort_strengths(body: BodyModel, strength: Mapping[str, Strength]) -> ca.SX:
+    """Per half-joint the strength [N·m] the comfort measure's effort divides by
+    (``comfort_strength``), an expression of ``body.q``."""
+    return ca.vertcat(*[comfort_strength(strength[h.name], body.q) for h in body.half_joints])
 
 
 def applied_forces(

@@ -19,7 +19,7 @@ import numpy as np
 from casadi_posture.biomech.comfort import ComfortMeasure, comfort_measure
 from casadi_posture.biomech.passive import PassiveTorque
 from casadi_posture.biomech.strength import Strength
-from casadi_posture.biomech.torques import torque_expressions
+from casadi_posture.biomech.torques import comfort_strengths, torque_expressions
 from casadi_posture.body.loads import LOAD_PARAMETERS, Load, pack
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.spec.schema import (
@@ -250,9 +250,8 @@ class Comfort(Task):
         if not self.measure.effort:
             return self.measure.rows(body, body.q, p)
         loads = p[n : n + LOAD_PARAMETERS * len(self.loads)]
-        _, _, active, strength = torque_expressions(
-            body, self.loads, loads, self.passive, self.strength
-        )
+        _, _, active, _ = torque_expressions(body, self.loads, loads, self.passive, self.strength)
+        strength = comfort_strengths(body, self.strength)
         weights = p[n + LOAD_PARAMETERS * len(self.loads) :]
         return self.measure.rows(body, body.q, p[:n], active, strength, weights)
 

@@ -23,15 +23,15 @@ import math
 import typing
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
 
 from casadi_posture.biomech.low_back import has_lumbar_joint, low_back_expressions, moment_arms
 from casadi_posture.biomech.passive import ExponentialPassive, PassiveTorque, ReshapedPassive
-from casadi_posture.biomech.strength import ConstantStrength, Strength
-from casadi_posture.biomech.torques import torque_expressions
+from casadi_posture.biomech.strength import ConstantStrength, ScaledCurveStrength, Strength
+from casadi_posture.biomech.torques import comfort_strengths, torque_expressions
 from casadi_posture.body.loads import LOAD_PARAMETERS, pack
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.data.parameters import Parameter
@@ -120,6 +120,7 @@ class ParametricProblem:
         self.tau_ext, _, self.tau_act, self.strength = torque_expressions(
             self.body, problem.loads, loads, passive, strengths
         )
+        self.comfort_strength = comfort_strengths(self.body, strengths)
         self._load_masses = [loads[LOAD_PARAMETERS * k] for k in range(len(problem.loads))]
         self.compression = (
             low_back_expressions(self.body, problem.loads, loads, *moment_arms())[0]
@@ -193,11 +194,25 @@ class ParametricProblem:
         problem, out = self.problem, {}
         for k, half in enumerate(problem.body.half_joints):
             model = problem.strength[half.name]
+            if isinstance(model, ScaledCurveStrength):
+                # a shipped curve: its scale is the input, as the file's strength_scale sets it
+                key = _strength_key(problem, k, "strength_scale")
+                x = self._input(key, _scale(problem, k), "1", "strength")
+                base = scaled[k] / _scale(problem, k)
+                out[half.name] = replace(model, value=base * x)
+                continue
             if not isinstance(model, ConstantStrength):
                 out[half.name] = model
                 self.left_out.setdefault(
                     f"strength.{half.name}", "a strength curve (its points are not inputs)"
                 )
+                continue
+            ratio = _ratio(problem, k)
+            if ratio is not None:
+                # a ratio to the body's elbow flexion: the ratio is the input
+                key = _strength_key(problem, k, "strength_ratio")
+                x = self._input(key, ratio, "1", "strength")
+                out[half.name] = ConstantStrength(scaled[k] * x / ratio)
                 continue
             key = _strength_key(problem, k)
             x = self._input(key, model.value, "N·m", "strength")
@@ -254,7 +269,9 @@ class ParametricProblem:
             neutral = ca.DM(task.measure.neutral)
             if not task.measure.effort:
                 return task.measure.rows(self.body, self.q, neutral)
-            return task.measure.rows(self.body, self.q, neutral, self.tau_act, self.strength)
+            return task.measure.rows(
+                self.body, self.q, neutral, self.tau_act, self.comfort_strength
+            )
         return task.residual(self.body, self._targets(task, i))
 
     def _targets(self, task: object, i: int) -> ca.SX:
@@ -358,18 +375,42 @@ class ParametricProblem:
         return ca.vertcat(*rows)
 
 
-def _strength_key(problem: Problem, k: int) -> str:
-    """The problem-file key that sets half-joint ``k``'s strength."""
+def _strength_key(problem: Problem, k: int, field: str = "strength_Nm") -> str:
+    """The problem-file key ``field`` of half-joint ``k``'s strength."""
     half = problem.body.half_joints[k]
     if problem.spec.body.tree is None:
-        return f"body.half_joints.{half.name}.strength_Nm"
+        return f"body.half_joints.{half.name}.{field}"
     side = "positive" if half.sign > 0 else "negative"
-    return f"body.tree.dofs[{half.dof_index}].{side}.strength_Nm"
+    return f"body.tree.dofs[{half.dof_index}].{side}.{field}"
+
+
+def _file_group(problem: Problem, k: int) -> Any:
+    """What the file sets for half-joint ``k`` (None: nothing)."""
+    half = problem.body.half_joints[k]
+    body = problem.spec.body
+    if body.tree is None:
+        return body.half_joints.get(half.name)
+    dof = body.tree.dofs[half.dof_index]
+    return dof.positive if half.sign > 0 else dof.negative
+
+
+def _scale(problem: Problem, k: int) -> float:
+    """Half-joint ``k``'s ``strength_scale`` in the file (1 when it gives none)."""
+    group = _file_group(problem, k)
+    scale = None if group is None else group.strength_scale
+    return 1.0 if scale is None else scale
+
+
+def _ratio(problem: Problem, k: int) -> float | None:
+    """Half-joint ``k``'s ``strength_ratio`` in the file (None when it gives none)."""
+    group = _file_group(problem, k)
+    return None if group is None else group.strength_ratio
 
 
 def _geometry(problem: Problem) -> np.ndarray:
     """The body's numbers in a fixed order: DOF origins, segment masses and centres of mass,
-    landmarks, sole points [m, kg], then every constant strength [N·m] (0 for a curve)."""
+    landmarks, sole points [m, kg], then every constant strength or shipped curve's scale
+    [N·m] (0 for a file's curve)."""
     body = problem.body
     numbers: list[float] = []
     for dof in body.dofs:
@@ -382,7 +423,8 @@ def _geometry(problem: Problem) -> np.ndarray:
         numbers += [c for point in foot.outline for c in point]
     for half in body.half_joints:
         model = problem.strength[half.name]
-        numbers.append(model.value if isinstance(model, ConstantStrength) else 0.0)
+        scalable = isinstance(model, ConstantStrength | ScaledCurveStrength)
+        numbers.append(model.value if scalable else 0.0)
     return np.asarray(numbers, dtype=float)
 
 

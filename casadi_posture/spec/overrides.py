@@ -59,8 +59,15 @@ def parse_value(text: str) -> Any:
         return text
 
 
+#: The keys that set a muscle group's strength, one at a time: an override of one of them
+#: replaces whichever the file gives (a what-if over ``strength_Nm`` on a file that sets
+#: ``strength_ratio``).
+STRENGTH_KEYS = ("strength_Nm", "strength_curve", "strength_scale", "strength_ratio")
+
+
 def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) -> dict[str, Any]:
-    """A copy of the file's data ``raw`` with each dotted key set to its value."""
+    """A copy of the file's data ``raw`` with each dotted key set to its value; setting one
+    of a group's ``STRENGTH_KEYS`` drops the file's others (not those set alongside)."""
     if not isinstance(overrides, Mapping):
         raise ProblemError(path, "overrides", overrides, "a mapping of dotted keys to values")
     out = deepcopy(raw)
@@ -83,5 +90,9 @@ def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) 
                 raise ProblemError(path, key, value, "an index of an existing list item")
         elif not isinstance(node, dict):
             raise ProblemError(path, key, value, "a key inside a table")
+        if last in STRENGTH_KEYS:
+            given = {parse_key(k)[-1] for k in overrides if parse_key(k)[:-1] == parts[:-1]}
+            for other in set(STRENGTH_KEYS) - given:
+                node.pop(other, None)
         node[last] = value
     return out

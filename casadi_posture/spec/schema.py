@@ -10,7 +10,7 @@ centimetres, a 1e308 kg load) are refused before anything is computed.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import (
     BaseModel,
@@ -22,6 +22,8 @@ from pydantic import (
     model_validator,
 )
 
+from casadi_posture.spec.overrides import STRENGTH_KEYS
+
 #: The ranges every number of a problem file must lie in (``docs/problem-files.md``).
 MAX_POSITION_M = 10.0  # a point farther than this from the origin is a unit slip (cm, mm)
 MAX_ANGLE_DEG = 360.0
@@ -31,6 +33,10 @@ MAX_MOMENT_NM = 1_000.0
 MAX_PASSIVE_NM = 1_000.0
 MAX_PASSIVE_RATE_PER_RAD = 50.0  # with angles within ±360°, exp() stays far from overflow
 MIN_STRENGTH_NM, MAX_STRENGTH_NM = 0.1, 2_000.0
+#: A strength_scale: a tenth to ten times the shipped default; a strength_ratio: a
+#: twentieth to twenty times the body's elbow-flexion strength.
+MIN_STRENGTH_SCALE, MAX_STRENGTH_SCALE = 0.1, 10.0
+MIN_STRENGTH_RATIO, MAX_STRENGTH_RATIO = 0.05, 20.0
 MAX_DURATION_S = 86_400.0
 MIN_TIME_STEP_S, MAX_TIME_STEP_S = 0.01, 60.0
 MAX_STEPS = 100_000
@@ -63,6 +69,10 @@ Angles3 = Annotated[list[Angle], Field(min_length=3, max_length=3)]
 PassiveMagnitude = Annotated[float, _between(0.0, MAX_PASSIVE_NM)]
 PassiveRate = Annotated[float, _between(0.0, MAX_PASSIVE_RATE_PER_RAD)]
 StrengthValue = Annotated[float, _between(MIN_STRENGTH_NM, MAX_STRENGTH_NM)]
+#: A factor on a group's shipped default strength (a person weaker or stronger than average).
+StrengthScale = Annotated[float, _between(MIN_STRENGTH_SCALE, MAX_STRENGTH_SCALE)]
+#: A group's posture-independent strength as a multiple of the body's elbow flexion.
+StrengthRatio = Annotated[float, _between(MIN_STRENGTH_RATIO, MAX_STRENGTH_RATIO)]
 Priority = Annotated[int, Field(ge=1, le=1000)]
 ComfortWeight = Annotated[float, _between(0.0, MAX_COMFORT_WEIGHT)]
 
@@ -183,14 +193,22 @@ class StrengthCurveSpec(Strict):
         return self
 
 
+def _one_strength(spec: Any) -> None:
+    """At most one of a group's strength keys (``STRENGTH_KEYS``)."""
+    given = [k for k in STRENGTH_KEYS if getattr(spec, k) is not None]
+    if len(given) > 1:
+        raise ValueError(f"one of {', '.join(STRENGTH_KEYS)}, not {' and '.join(given)}")
+
+
 class HalfJointSpec(Strict):
     strength_Nm: StrengthValue | None = None
     strength_curve: StrengthCurveSpec | None = None
+    strength_scale: StrengthScale | None = None
+    strength_ratio: StrengthRatio | None = None
 
     @model_validator(mode="after")
     def _one(self) -> HalfJointSpec:
-        if self.strength_Nm is not None and self.strength_curve is not None:
-            raise ValueError("either strength_Nm or strength_curve, not both")
+        _one_strength(self)
         return self
 
 
@@ -206,12 +224,13 @@ class TreeHalfJointSpec(Strict):
     name: Name
     strength_Nm: StrengthValue | None = None
     strength_curve: StrengthCurveSpec | None = None
+    strength_scale: StrengthScale | None = None
+    strength_ratio: StrengthRatio | None = None
     region: Name = "general"
 
     @model_validator(mode="after")
     def _one(self) -> TreeHalfJointSpec:
-        if self.strength_Nm is not None and self.strength_curve is not None:
-            raise ValueError("either strength_Nm or strength_curve, not both")
+        _one_strength(self)
         return self
 
 
