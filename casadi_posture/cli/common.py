@@ -251,6 +251,15 @@ SET_OPTION = click.option(
     help="Set a problem key before validation (repeatable): fatigue.strategy=passive, "
     "'loads[0].mass_kg=5' (quoted: shells read [0] as a pattern).",
 )
+
+
+def no_report_option(page: str):
+    """The ``--no-report`` flag of a command whose report.html shows ``page``."""
+    return click.option(
+        "--no-report", "no_report", is_flag=True, help=f"Do not write report.html ({page})."
+    )
+
+
 FORCE_OPTION = click.option(
     "--force", is_flag=True, help="Overwrite the output if it exists (otherwise refused)."
 )

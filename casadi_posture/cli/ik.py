@@ -16,6 +16,7 @@ from casadi_posture.cli.common import (
     echo_torques,
     emit_json,
     main,
+    no_report_option,
     problem_from,
 )
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
@@ -25,12 +26,8 @@ from casadi_posture.output.report import table
 from casadi_posture.output.scores import lines
 from casadi_posture.runs.compare import rows
 
-NO_REPORT_OPTION = click.option(
-    "--no-report",
-    "no_report",
-    is_flag=True,
-    help="Do not write report.html (one page for a browser: the postures in 3-D, the "
-    "summary, the loads and the tables).",
+NO_REPORT_OPTION = no_report_option(
+    "one page for a browser: the postures in 3-D, the summary, the loads and the tables"
 )
 
 

@@ -21,6 +21,7 @@ from casadi_posture.cli.common import (
     command_line,
     echo_free_dofs,
     main,
+    no_report_option,
     parse_sets,
     problem_from,
     shown_groups,
@@ -70,12 +71,8 @@ from casadi_posture.static import law
     help="Also write animation.gif (or, --animate mp4, animation.mp4: needs ffmpeg) of the "
     "stick figure over the run. Put it after PROBLEM or write --animate=gif.",
 )
-@click.option(
-    "--no-report",
-    "no_report",
-    is_flag=True,
-    help="Do not write report.html (the run in one page for a browser: the body in 3-D "
-    "with a time slider, the curves, the summary).",
+@no_report_option(
+    "the run in one page for a browser: the body in 3-D with a time slider, the curves, the summary"
 )
 @ALL_OPTION
 @SET_OPTION
