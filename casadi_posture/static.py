@@ -154,10 +154,16 @@ class Level:
 
     @property
     def outcome(self) -> str:
-        """In a word or three: yes, NO, or minimised (a criterion)."""
-        if self.criterion and not self.achieved:
-            return "minimised (criterion)"
-        return "yes" if self.achieved else "NO"
+        """In a word or three: ``level_outcome``."""
+        return level_outcome(self.achieved, self.criterion)
+
+
+def level_outcome(achieved: bool, criterion: bool) -> str:
+    """A level's outcome in a word or three: yes, NO, or minimised (a criterion level, never
+    expected to reach zero)."""
+    if criterion and not achieved:
+        return "minimised (criterion)"
+    return "yes" if achieved else "NO"
 
 
 @dataclass(frozen=True)

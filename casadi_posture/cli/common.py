@@ -14,7 +14,7 @@ from casadi_posture import __version__, interrupt
 from casadi_posture.errors import CasadiPostureError, ProblemError
 from casadi_posture.ik.solvers import SOLVER_NAMES
 from casadi_posture.output.plain import dumps
-from casadi_posture.output.report import table
+from casadi_posture.output.report import DOF_COLUMNS, HALF_JOINT_COLUMNS, table
 from casadi_posture.problem import Problem, load_problem
 from casadi_posture.spec.overrides import parse_value, split_assignment
 from casadi_posture.static import SCHEDULE_NOTE, StaticAnswer
@@ -173,24 +173,14 @@ def echo_torques(answer: StaticAnswer, show_all: bool = False) -> None:
     shown_dofs = [d for d in dofs if len(keep) == len(groups) or d["name"] in names]
     click.echo(
         table(
-            ["DOF", "angle (deg)", "external (N·m)", "passive (N·m)", "active (N·m)"],
+            DOF_COLUMNS,
             [list(d.values()) for d in shown_dofs],
         )
     )
     click.echo()
     click.echo(
         table(
-            [
-                "half-joint",
-                "DOF",
-                "strength (N·m)",
-                "torque (N·m)",
-                "load (%MVC)",
-                "endurance (min)",
-                "verdict",
-                "capable men (%)",
-                "capable women (%)",
-            ],
+            [*HALF_JOINT_COLUMNS, "capable men (%)", "capable women (%)"],
             [
                 [
                     groups[k].name,

@@ -29,6 +29,7 @@ from casadi_posture.output.html_page import (
     table,
     write_page,
 )
+from casadi_posture.output.report import HALF_JOINT_COLUMNS
 from casadi_posture.output.scene import Scene
 from casadi_posture.output.scores import lines as score_lines
 from casadi_posture.problem import Problem
@@ -90,32 +91,10 @@ def solve_case(answer: StaticAnswer) -> Case:
             [[lv.level, lv.tasks, lv.residual, lv.unit, lv.outcome] for lv in answer.levels],
         ),
     )
+    loaded = sorted(answer.half_joints(), key=lambda g: -g["load_pct_mvc"])
     tables += section(
         "Half-joints",
-        table(
-            [
-                "half-joint",
-                "DOF",
-                "strength (N·m)",
-                "torque (N·m)",
-                "load (%MVC)",
-                "endurance (min)",
-                "verdict",
-            ],
-            [
-                [
-                    g.name,
-                    g.dof,
-                    g.strength,
-                    g.torque,
-                    g.load_pct_mvc,
-                    g.endurance_min if math.isfinite(g.endurance_min) else None,
-                    g.verdict,
-                ]
-                for g in sorted(answer.groups, key=lambda g: -g.load_pct_mvc)
-            ],
-            **{"class": "sortable"},
-        ),
+        table(HALF_JOINT_COLUMNS, [list(g.values()) for g in loaded], **{"class": "sortable"}),
         closed=True,
     )
     tables += section(

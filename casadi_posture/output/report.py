@@ -6,6 +6,14 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+#: The columns of a static answer's half-joint table (``StaticAnswer.half_joints``, in that
+#: order) and of its DOF table (``StaticAnswer.dofs``), with units.
+HALF_JOINT_COLUMNS = (
+    "half-joint", "DOF", "strength (N·m)", "torque (N·m)", "load (%MVC)", "endurance (min)",
+    "verdict",
+)  # fmt: skip
+DOF_COLUMNS = ("DOF", "angle (deg)", "external (N·m)", "passive (N·m)", "active (N·m)")
+
 
 def fmt(value: Any, digits: int = 3) -> str:
     """A cell: floats with fixed decimals, an unlimited value (infinity) as '∞', None as '-'.

@@ -14,6 +14,7 @@ from casadi_posture.output.html_page import table, write_page
 from casadi_posture.output.posture_page import Case, page_html, section
 from casadi_posture.problem import Problem
 from casadi_posture.runs.compare import Comparison
+from casadi_posture.static import level_outcome
 
 
 def compare_case(problem: Problem, comparison: Comparison, flags: Sequence[str]) -> Case:
@@ -30,7 +31,7 @@ def compare_case(problem: Problem, comparison: Comparison, flags: Sequence[str])
         ["level", "tasks", "unit", "residual nullspace", "residual lexicographic",
          "achieved nullspace", "achieved lexicographic"],
         [[k + 1, name, comparison.units[k], ns.residuals[k], lx.residuals[k],
-          *(_outcome(r.achieved[k], k == comparison.criterion) for r in (ns, lx))]
+          *(level_outcome(r.achieved[k], k == comparison.criterion) for r in (ns, lx))]
          for k, name in enumerate(comparison.levels)],
     )  # fmt: skip
     a, b = np.degrees(ns.q), np.degrees(lx.q)
@@ -53,12 +54,6 @@ def compare_case(problem: Problem, comparison: Comparison, flags: Sequence[str])
         flags=tuple(flags),
         tables=section("Priority levels", levels) + section("DOFs", dofs, closed=True),
     )
-
-
-def _outcome(achieved: bool, criterion: bool) -> str:
-    if criterion and not achieved:
-        return "minimised (criterion)"
-    return "yes" if achieved else "NO"
 
 
 def compare_page(pairs: Sequence[tuple[Problem, Comparison, Sequence[str]]]) -> str:
