@@ -11,7 +11,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casadi_posture.biomech.strength import default_strength, known_groups
+from casadi_posture.biomech.strength import comfort_strength, default_strength, known_groups
 from casadi_posture.data import parameters
 from casadi_posture.data.parameters import data_name
 from casadi_posture.errors import ProblemError
@@ -138,15 +138,12 @@ def _pooled_cv(group: str, sex: str) -> float:
 
 #: RBDL Gymnast τ_ISO [N·m] (GymnastWholeBody); elbow flexion 101.384.
 GYMNAST = {
-    "shoulder_internal_rotators": 50.522,
-    "shoulder_external_rotators": 43.5837,
     "forearm_pronators": 12.976,
     "forearm_supinators": 13.5361,
     "wrist_extensors": 15.5653,
     "wrist_radial_deviators": 23.8345,
     "wrist_ulnar_deviators": 31.4217,
     "lumbar_flexors": 211.65,
-    "lumbar_extensors": 687.864,
 }
 
 #: Our estimates c in c·m·g·h (no population source).
@@ -275,6 +272,43 @@ def test_gymnast_ratio_groups_by_hand(group: str, body: dict) -> None:
     assert f"× ratio {ratio:g}" in record.source and "elite" in record.source
 
 
+#: Groups whose ratio is a published isometric mean of men over the Harbo elbow flexion of
+#: men of that study's age and size: (the study's men, their value [N·m], its women, their
+#: value [N·m] and SD): shoulder rotators of 15 young men and 15 young women (arm at the side);
+#: torso extension at 20° of trunk flexion (Chaffin, Andersson & Martin, Table 4.5) of our
+#: reference man, checked against 16 women with the axis at the iliac spines (Rantanen 1994;
+#: no SD published: 5 %).
+PUBLISHED_MEANS = {
+    "shoulder_internal_rotators": (
+        {"sex": "male", "age": 22.0, "stature": 1.785, "body_mass": 85.4},
+        54.6,
+        {"sex": "female", "age": 21.0, "stature": 1.685, "body_mass": 70.1},
+        (24.7, 6.5),
+    ),
+    "shoulder_external_rotators": (
+        {"sex": "male", "age": 22.0, "stature": 1.785, "body_mass": 85.4},
+        39.6,
+        {"sex": "female", "age": 21.0, "stature": 1.685, "body_mass": 70.1},
+        (20.4, 3.7),
+    ),
+    "lumbar_extensors": (MALE, 288.0, FEMALE, (182.2, 0.05 * 182.2)),
+}
+
+
+@pytest.mark.parametrize("group", sorted(PUBLISHED_MEANS))
+def test_measured_ratio_groups_give_the_published_means(group: str) -> None:
+    """The study's men get the published mean; its women (whose value was not used) lie
+    within one SD; every body scales with its own Harbo elbow flexion."""
+    men, value, women, (mean, sd) = PUBLISHED_MEANS[group]
+    model, record = default_strength(group, **men)
+    assert model.value == pytest.approx(value, rel=5e-4)
+    assert "elite" not in record.source and "docs/strength.md" in record.source
+    assert abs(default_strength(group, **women)[0].value - mean) < sd
+    for body in BODIES:
+        scale = _harbo("elbow_flexion_isometric", body) / _harbo("elbow_flexion_isometric", men)
+        assert default_strength(group, **body)[0].value == pytest.approx(value * scale, rel=5e-4)
+
+
 #: Published strengths [N·m] of men at angles [deg] of the group's own DOF, away from the
 #: curve's knots (within a knot's ±3° rounding they are within 1.1 %): the shoulder flexors
 #: 89.9 at 0° and 68.6 at 45° (KIN-COM, young men), the line on to 90° and held.
@@ -304,12 +338,30 @@ def test_curve_groups_give_the_published_strengths(group: str) -> None:
         assert _at(woman, angle) == pytest.approx(published * scale, rel=2e-3), angle
 
 
-def test_the_comfort_measure_divides_by_the_ratio_it_was_set_with() -> None:
-    """0.899 × Harbo elbow flexion, posture-independent: 43.0 N·m for the reference man at
-    30 y, 26.75 N·m for the reference woman (the earlier constant strength)."""
-    for body, expected in ((MALE, 43.000968), (FEMALE, 26.751543)):
-        model, _ = default_strength("shoulder_flexors", **body)
-        assert float(model.reference) == pytest.approx(expected, rel=1e-6)
+#: The ratios to elbow flexion the comfort measure was set with (the Gymnast's), kept as its
+#: effort scale for the groups whose strength is now a measured one.
+COMFORT_RATIOS = {
+    "shoulder_flexors": 0.899,
+    "shoulder_internal_rotators": 50.522 / 101.384,
+    "shoulder_external_rotators": 43.5837 / 101.384,
+    "lumbar_extensors": 687.864 / 101.384,
+}
+
+
+@pytest.mark.parametrize("body", [MALE, FEMALE], ids=["male", "female"])
+@pytest.mark.parametrize("group", sorted(COMFORT_RATIOS))
+def test_the_comfort_measure_divides_by_the_ratio_it_was_set_with(group: str, body: dict) -> None:
+    """The earlier ratio × Harbo elbow flexion, posture-independent (for the shoulder flexors
+    43.0 N·m for the reference man, 26.75 N·m for the reference woman: the earlier constant
+    strength); every other group divides by its own strength."""
+    model, record = default_strength(group, **body)
+    expected = _harbo("elbow_flexion_isometric", body) * round(COMFORT_RATIOS[group], 3)
+    assert float(model.reference) == pytest.approx(expected, rel=1e-9)
+    assert "comfort measure divides by" in record.source
+    q = ca.SX.sym("q", model.dof_index + 1 if hasattr(model, "dof_index") else 1)
+    assert float(ca.evalf(comfort_strength(model, q))) == pytest.approx(expected, rel=1e-9)
+    other, _ = default_strength("elbow_extensors", **body)
+    assert float(ca.evalf(comfort_strength(other, q))) == pytest.approx(other.value, rel=1e-12)
 
 
 @pytest.mark.parametrize("body", [MALE, FEMALE], ids=["male", "female"])

@@ -121,6 +121,35 @@ def test_a_minimised_level_an_unreachable_dot_against_finite_differences() -> No
     assert _check(problem, result, keys) == 6
 
 
+@pytest.mark.parametrize(
+    ("name", "group"),
+    [
+        ("seated_assembly", "shoulder_external_rotators_r"),
+        ("standing_shelf_box", "lumbar_extensors"),
+    ],
+)
+def test_a_measured_strength_s_scale_against_finite_differences(name: str, group: str) -> None:
+    """The seated worker's external rotators and the shelf's trunk extensors, shipped
+    measured values the comfort measure does not divide by: their input is the file's
+    strength_scale, and the group's own load follows it as a finite difference of the
+    re-solved problem does."""
+    problem = cp.load(f"problems/{name}.toml")
+    result = sensitivity(problem)
+    j, item = next(
+        (j, item)
+        for j, item in enumerate(result.inputs)
+        if item.key == f"body.half_joints.{group}.strength_scale"
+    )
+    assert item.value == 1.0 and item.unit == "1"
+    k = result.groups.index(group)
+    h = 1e-4
+    plus = _outcome(_perturbed(problem, item, h), group)[0]
+    minus = _outcome(_perturbed(problem, item, -h), group)[0]
+    fd = (plus - minus) / (2 * h)
+    assert result.d_load[k, j] == pytest.approx(fd, rel=RELATIVE, abs=1e-7)
+    assert result.d_load[k, j] < -0.01 * result.load_pct_mvc[k]
+
+
 @pytest.mark.slow
 def test_the_standing_body_against_finite_differences() -> None:
     """29 DOF, four levels (feet, balance and the protocol's plane, line, dot, comfort): a

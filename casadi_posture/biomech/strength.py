@@ -21,11 +21,12 @@ class Strength(Protocol):
 
 
 def comfort_strength(model: Strength, q: ca.SX) -> ca.SX:
-    """The strength [N·m] the comfort measure's effort row divides by: a shipped curve's
-    constant reference value (``ScaledCurveStrength.reference``), so that the curve
-    changes the loads (%MVC) and the fatigue but not the balance of the comfort measure's
-    terms; any other model's own st(q)."""
-    if isinstance(model, ScaledCurveStrength):
+    """The strength [N·m] the comfort measure's effort row divides by: a constant or shipped
+    curve's ``reference`` (the comfort measure's own effort scale where the shipped data set
+    one, ``comfort_ratio`` in strength.toml, so that a measured strength changes the loads
+    (%MVC) and the fatigue but not the balance of the comfort measure's terms); any other
+    model's own st(q)."""
+    if isinstance(model, ConstantStrength | ScaledCurveStrength):
         return ca.SX(model.reference)
     return model.expression(q)
 
@@ -34,7 +35,14 @@ def comfort_strength(model: Strength, q: ca.SX) -> ca.SX:
 class ConstantStrength:
     """A posture-independent strength [N·m]."""
 
-    value: float
+    value: float | ca.SX
+    #: The fraction [-] of ``value`` the comfort measure divides by (1: the strength itself).
+    comfort_fraction: float = 1.0
+
+    @property
+    def reference(self) -> float | ca.SX:
+        """The constant [N·m] the comfort measure divides by: ``value`` × ``comfort_fraction``."""
+        return self.value * self.comfort_fraction
 
     def expression(self, q: ca.SX) -> ca.SX:
         return ca.SX(self.value)
@@ -126,12 +134,20 @@ def default_strength(
     """
     group = data_name(half_joint)
     table = parameters.load("strength")
+    comfort_fraction = 1.0
     if f"strength.ratio.{group}" in table:
         ratio = table[f"strength.ratio.{group}"]
         elbow_flexors, elbow = elbow_flexion(sex, stature, body_mass, age)
         value = elbow_flexors * ratio.value
         source = f"{elbow} × ratio {ratio.value:g} ({ratio.source})"
         evidence = "C1+E"
+        if f"strength.comfort_ratio.{group}" in table:
+            comfort = table[f"strength.comfort_ratio.{group}"].value
+            comfort_fraction = comfort / ratio.value
+            source += (
+                f"; the comfort measure divides by a constant {value * comfort_fraction:.2f} "
+                f"N·m (ratio {comfort:g})"
+            )
     elif f"strength.harbo_2012_groups.{group}.{sex}.intercept" in table:
         value, c, record = _harbo(f"harbo_2012_groups.{group}", sex, stature, body_mass, age)
         source = (
@@ -172,12 +188,6 @@ def default_strength(
             f"; at the angles {angles.value} deg of its DOF × {fractions.value}: "
             f"{', '.join(f'{n:.2f} N·m' for _, n in points)} ({angles.source})"
         )
-        comfort = table[f"strength.ratio_curve.{group}.comfort_ratio"].value
-        comfort_fraction = comfort / ratio.value
-        source += (
-            f"; the comfort measure divides by a constant {value * comfort_fraction:.2f} N·m "
-            f"(ratio {comfort:g})"
-        )
         curve = ScaledCurveStrength(
             value,
             dof_index,
@@ -196,7 +206,7 @@ def default_strength(
         status="estimate",
         evidence=evidence,
     )
-    return ConstantStrength(value), record
+    return ConstantStrength(value, comfort_fraction), record
 
 
 def elbow_flexion(sex: str, stature: float, body_mass: float, age: float) -> tuple[float, str]:

@@ -194,8 +194,12 @@ class ParametricProblem:
         problem, out = self.problem, {}
         for k, half in enumerate(problem.body.half_joints):
             model = problem.strength[half.name]
-            if isinstance(model, ScaledCurveStrength):
-                # a shipped curve: its scale is the input, as the file's strength_scale sets it
+            shipped_scale = isinstance(model, ScaledCurveStrength) or (
+                isinstance(model, ConstantStrength) and model.comfort_fraction != 1.0
+            )
+            if shipped_scale:
+                # a shipped curve, or a shipped value with the comfort measure's own scale: its
+                # scale is the input, as the file's strength_scale sets it
                 key = _strength_key(problem, k, "strength_scale")
                 x = self._input(key, _scale(problem, k), "1", "strength")
                 base = scaled[k] / _scale(problem, k)
@@ -212,11 +216,11 @@ class ParametricProblem:
                 # a ratio to the body's elbow flexion: the ratio is the input
                 key = _strength_key(problem, k, "strength_ratio")
                 x = self._input(key, ratio, "1", "strength")
-                out[half.name] = ConstantStrength(scaled[k] * x / ratio)
+                out[half.name] = replace(model, value=scaled[k] * x / ratio)
                 continue
             key = _strength_key(problem, k)
             x = self._input(key, model.value, "N·m", "strength")
-            out[half.name] = ConstantStrength(x + (scaled[k] - model.value))
+            out[half.name] = replace(model, value=x + (scaled[k] - model.value))
         return out
 
     def _passive(self, dof: str) -> PassiveTorque:
