@@ -26,6 +26,8 @@ from casadi_posture.description import description
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
+from casadi_posture.motion.angles import read_angles
+from casadi_posture.motion.recording import Recording, repeat, resample
 from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
@@ -54,7 +56,7 @@ from casadi_posture.runs.compare_report import write_compare_page
 from casadi_posture.runs.grid_report import PAGE, write_grid_report
 from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
 from casadi_posture.runs.whatif_plots import plot_outcomes
-from casadi_posture.simulation import SimulationResult
+from casadi_posture.simulation import SimulationResult, replay
 from casadi_posture.simulation import simulate as run_simulation
 from casadi_posture.static import StaticAnswer, at_posture
 from casadi_posture.static import solve as solve_static
@@ -197,6 +199,49 @@ def simulate(problem: Problem, solver: str | None = None) -> Simulation:
     steps with the steps run so far (``stop == "interrupted"``)."""
     check_solver(solver, problem.path)
     return Simulation(run_simulation(problem, solver))
+
+
+def read_motion(
+    problem: Problem,
+    motion: str | Path,
+    *,
+    resample_s: float | None = None,
+    repeat_times: int | None = None,
+    until_s: float | None = None,
+) -> Recording:
+    """A recorded motion on the problem's body (docs/motion.md): a CSV or Parquet file of
+    joint angles [deg] with a time column [s]; resampled every ``resample_s`` [s] if given,
+    then played ``repeat_times`` times or until ``until_s`` [s] as a work cycle."""
+    recording = read_angles(
+        Path(motion), problem.body, problem.spec.motion, problem.posture, problem.path
+    )
+    if resample_s is not None:
+        recording = resample(recording, resample_s)
+    if repeat_times is not None or until_s is not None:
+        recording = repeat(recording, times=repeat_times, until_s=until_s)
+    return recording
+
+
+def evaluate(
+    problem: Problem,
+    motion: str | Path | Recording,
+    *,
+    resample_s: float | None = None,
+    repeat_times: int | None = None,
+    until_s: float | None = None,
+) -> Simulation:
+    """The problem's body driven by a recorded motion instead of the IK: the torques, loads,
+    fatigue, recovery, low back and RULA/REBA of every frame, as ``simulate`` gives them for
+    predicted postures (``motion``: a file, read by ``read_motion`` with the other
+    arguments, or a ``Recording``). Nothing moves the posture: a group the model finds
+    exhausted is an event and a flag, and the recording goes on."""
+    if isinstance(motion, Recording):
+        recording = motion
+    else:
+        recording = read_motion(
+            problem, motion, resample_s=resample_s, repeat_times=repeat_times, until_s=until_s
+        )
+    return Simulation(replay(problem, recording))
 
 
 def write_solve(

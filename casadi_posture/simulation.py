@@ -42,6 +42,7 @@ from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE, IKResult
 from casadi_posture.ik.solvers import SOLVER_NAMES, Solver, cached_solver
 from casadi_posture.ik.tasks import Comfort, Line, Task, tasks_from_specs
+from casadi_posture.motion.recording import Recording
 from casadi_posture.problem import Problem
 from casadi_posture.spec.schema import ComfortTask
 from casadi_posture.static import STRENGTH_PCT_MVC
@@ -53,6 +54,9 @@ Phase = Literal["hold", "rest"]
 #: strength), the top task could not be achieved at the start, Ctrl-C, or (asked for with
 #: ``stop_at_threshold``) a group reached the fatigue threshold.
 Stop = Literal["completed", "exhausted", "never_held", "interrupted", "fatigue_threshold"]
+
+#: The solver column of a frame whose posture a recording gave (``replay``).
+RECORDED = "recorded"
 
 
 @dataclass(frozen=True)
@@ -88,7 +92,8 @@ class Timeline:
 @dataclass(frozen=True)
 class SimulationResult:
     """A simulated hold: its tasks, the name and unit of each level, the timeline, the
-    events, why it stopped and solver statistics (wall times [s]). ``ik_failures`` counts
+    events, why it stopped and solver statistics (wall times [s]); ``recording`` the motion that
+    gave the postures instead of the IK (``replay``; None: simulated). ``ik_failures`` counts
     steps whose posture no solver could certify; ``ik_fallbacks`` the steps the other solver
     was called on after a failure or stall, or took over because the first left level 1
     unachieved where it achieves it; ``ik_reused`` the steps that kept the last
@@ -112,6 +117,7 @@ class SimulationResult:
     ik_iterations: int
     ik_reused: int
     schedule: Schedule | None = None
+    recording: Recording | None = None
 
     def __repr__(self) -> str:
         return (
@@ -279,18 +285,97 @@ def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> Simul
     return _result(run, state, started)
 
 
+def replay(problem: Problem, recording: Recording) -> SimulationResult:
+    """The problem's body driven by ``recording`` instead of the IK (``casadi-posture
+    evaluate``; docs/motion.md). Per frame: the torques and loads at the recorded posture
+    with the problem's loads, the fatigue over the time since the frame before, the
+    hysteresis and its events. Nothing moves the posture: no fatigue constraint acts, and a
+    group the model finds exhausted (fatigue 1, or a load above its strength) is an event
+    while the recording goes on. With tasks, the levels' residuals say how far the recorded
+    posture is from them. Ctrl-C stops it between two frames with the frames so far
+    (``stop == "interrupted"``)."""
+    if recording.q.shape[1] != len(problem.body.dofs):
+        raise ValueError(f"{recording.q.shape[1]} angles a frame for {len(problem.body.dofs)} DOFs")
+    with interrupt.deferred():
+        return _replay(problem, recording)
+
+
+def _replay(problem: Problem, recording: Recording) -> SimulationResult:
+    """Step the recording's frames, and gather the result."""
+    started = time.perf_counter()
+    run = _replay_setup(problem)
+    state = _State(run.fatigue.initial_state(), recording.q[0].copy())
+    gave_out = np.zeros(len(run.names), dtype=bool)
+    for step, now in enumerate(recording.time.tolist()):
+        if interrupt.requested():
+            state.events.append(Event(now, "interrupted", "", "Ctrl-C: the run stopped here"))
+            state.stop = "interrupted"
+            break
+        state.q = recording.q[step]
+        dt = now - float(recording.time[step - 1]) if step else 0.0
+        loads, over, _ = _update_fatigue(run, state, step, now, dt)
+        for k in np.flatnonzero((state.levels >= 1.0) & ~gave_out):
+            cause = "load above strength" if k in over else "fatigue reached 1"
+            detail = f"{cause}: the model's group gives out here; the recording goes on"
+            state.events.append(Event(now, "exhausted", run.names[k], detail))
+        gave_out |= state.levels >= 1.0
+        residuals = np.zeros(0) if run.hierarchy is None else run.hierarchy.residual_norms(state.q)
+        state.record.add(
+            **_row(
+                run.position,
+                run.constraint,
+                now,
+                state.q,
+                state.torques,
+                loads,
+                state.levels,
+                residuals,
+                RECORDED,
+            )
+        )
+    state.events = [e for e in state.events if e.kind not in ("constraint_on", "constraint_off")]
+    return _result(run, state, started, recording)
+
+
+def _replay_setup(problem: Problem) -> _Setup:
+    """What a replay builds once: the torque and fatigue models, the hysteresis, the
+    effector's compiled position and, if the problem has tasks, their levels."""
+    hierarchy = problem.hierarchy() if problem.spec.tasks else None
+    settings = constraint_settings(problem)
+    effector, line = _tracked(problem, hierarchy)
+    return _Setup(
+        problem,
+        RECORDED,
+        settings,
+        hierarchy,
+        None,
+        None,
+        problem.torque_model(),
+        problem.fatigue,
+        FatigueConstraint(problem.body, problem.passive, settings),
+        effector,
+        line,
+        ca.Function("effector", [problem.body.q], [problem.body.landmark(effector)]),
+        [h.name for h in problem.body.half_joints],
+        "" if hierarchy is None else hierarchy.level_names()[0],
+        math.nan,
+        None,
+    )
+
+
 @dataclass(frozen=True)
 class _Setup:
     """What a run builds once, before its loop: the solvers (``kept_solvers`` on the
-    whole-body adjustment's kept levels, None with the paper's), the torque and fatigue
-    models, the constraint, the tracked effector and line, the compiled effector position,
-    the half-joint names, the top level's name, the step [s] and the schedule."""
+    whole-body adjustment's kept levels, None with the paper's; no solver in a replay), the
+    torque and fatigue models, the constraint, the tracked effector and line, the compiled
+    effector position, the half-joint names, the top level's name, the step [s] and the
+    schedule."""
 
     problem: Problem
     solver: str
     settings: ConstraintSettings
-    hierarchy: TaskHierarchy
-    solvers: _Solvers
+    hierarchy: TaskHierarchy | None
+    solvers: _Solvers | None
     kept_solvers: _Solvers | None
     torque_model: TorqueModel
     fatigue: FatigueModel
@@ -302,6 +387,11 @@ class _Setup:
     top: str
     dt: float
     schedule: Schedule | None
+
+    @property
+    def depth(self) -> int:
+        """The number of priority levels (0: a replay of a problem without tasks)."""
+        return 0 if self.hierarchy is None else self.hierarchy.depth
 
 
 @dataclass
@@ -360,7 +450,7 @@ def _setup(problem: Problem, solver: str | None) -> _Setup:
         )
         kept_solvers = _Solvers(name, problem, whole_body.kept_hierarchy)
     constraint = FatigueConstraint(body, problem.passive, settings, hierarchy, whole_body)
-    effector, line = _tracked(hierarchy)
+    effector, line = _tracked(problem, hierarchy)
     return _Setup(
         problem,
         name,
@@ -387,7 +477,8 @@ def _rest_step(run: _Setup, state: _State, now: float) -> None:
     state.fatigue_state = run.fatigue.step(state.fatigue_state, loads, run.dt)
     state.levels = run.fatigue.level(state.fatigue_state, loads)
     state.events += run.constraint.update(state.levels, now)
-    row = _row(run.position, run.constraint, state.q, None, loads, state.levels, None, None)
+    idle = np.full(run.depth, math.nan)
+    row = _row(run.position, run.constraint, now, state.q, None, loads, state.levels, idle, "")
     state.record.add(**row)
 
 
@@ -395,16 +486,18 @@ def _hold_step(run: _Setup, state: _State, step: int, now: float, stop_at_thresh
     """A hold step at ``now`` [s]: constraint, IK, fatigue, checks, row; True if the run ends."""
     inequality, goal = _plan_constraint(run, state, now)
     _solve_ik(run, state, inequality, now)
-    loads, over, changes = _update_fatigue(run, state, step, now)
+    loads, over, changes = _update_fatigue(run, state, step, now, run.dt)
     _check_level_one(run, state, step, now)
     row = _row(
         run.position,
         run.constraint,
+        now,
         state.q,
         state.torques,
         loads,
         state.levels,
-        state.result,
+        state.result.residuals,
+        state.result.solver,
         goal,
     )
     state.record.add(**row)
@@ -476,13 +569,14 @@ def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: fl
 
 
 def _update_fatigue(
-    run: _Setup, state: _State, step: int, now: float
+    run: _Setup, state: _State, step: int, now: float, dt: float
 ) -> tuple[np.ndarray, np.ndarray, list[Event]]:
-    """Torques and fatigue at the new posture: the loads [%MVC], groups over strength, events."""
+    """Torques and fatigue at the new posture, over the ``dt`` [s] since the step before:
+    the loads [%MVC], groups over strength, events."""
     state.torques = run.torque_model.evaluate(state.q)
     loads = state.torques.load_pct_mvc
     if step > 0:
-        state.fatigue_state = run.fatigue.step(state.fatigue_state, loads, run.dt)
+        state.fatigue_state = run.fatigue.step(state.fatigue_state, loads, dt)
     levels = run.fatigue.level(state.fatigue_state, loads)
     over = np.flatnonzero(loads > STRENGTH_PCT_MVC)
     for k in over:
@@ -550,22 +644,26 @@ def _ends(
     return False
 
 
-def _result(run: _Setup, state: _State, started: float) -> SimulationResult:
-    """The run's result, with the wall time [s] since ``started`` (``time.perf_counter``)."""
-    hierarchy, spec = run.hierarchy, run.problem.spec
+def _result(
+    run: _Setup, state: _State, started: float, recording: Recording | None = None
+) -> SimulationResult:
+    """The run's result, with the wall time [s] since ``started`` (``time.perf_counter``);
+    a replay's ``recording``."""
+    hierarchy = run.hierarchy
+    levels = () if hierarchy is None else hierarchy.levels
     timeline = _timeline(run, state.record)
     return SimulationResult(
         run.problem,
         run.solver,
         run.settings,
         run.effector,
-        tuple(t for level in hierarchy.levels for t in level),
-        tuple(hierarchy.level_names()),
-        tuple(hierarchy.level_units()),
+        tuple(t for level in levels for t in level),
+        () if hierarchy is None else tuple(hierarchy.level_names()),
+        () if hierarchy is None else tuple(hierarchy.level_units()),
         timeline,
         state.events,
         state.stop,
-        spec.simulation.duration_s,
+        run.problem.spec.simulation.duration_s if recording is None else recording.duration_s,
         time.perf_counter() - started,
         state.ik_time,
         state.failures,
@@ -573,6 +671,7 @@ def _result(run: _Setup, state: _State, started: float) -> SimulationResult:
         state.iterations,
         state.reused,
         run.schedule,
+        recording,
     )
 
 
@@ -586,7 +685,7 @@ def _timeline(run: _Setup, record: _Recorder) -> Timeline:
         direction = np.asarray(run.line.direction) / np.linalg.norm(run.line.direction)
         along = (effector_path - np.asarray(run.line.point)) @ direction
     return Timeline(
-        np.arange(count) * run.dt,
+        record.array("time") if count else np.zeros(0),
         _rows(record, "q", count, body.n),
         effector_path,
         along,
@@ -604,7 +703,7 @@ def _timeline(run: _Setup, record: _Recorder) -> Timeline:
             )
         ),
         list(record.rows.get("case", [])),
-        _rows(record, "residuals", count, run.hierarchy.depth),
+        _rows(record, "residuals", count, run.depth),
         list(record.rows.get("solver", [])),
         list(record.rows.get("phase", [])),
         _balance(run.problem, _rows(record, "q", count, body.n)) if count else None,
@@ -614,17 +713,21 @@ def _timeline(run: _Setup, record: _Recorder) -> Timeline:
 def _row(
     position: ca.Function,
     constraint: FatigueConstraint,
+    now: float,
     q: np.ndarray,
     torques: Torques | None,
     loads: np.ndarray,
     levels: np.ndarray,
-    result: IKResult | None,
-    goal: Goal | None,
+    residuals: np.ndarray,
+    solver: str,
+    goal: Goal | None = None,
 ) -> dict[str, object]:
-    """A timeline row: a hold step's (``torques`` and ``result`` given) or a rest step's
-    (None: the last held posture ``q`` [rad], NaN torques and residuals, no solver)."""
+    """A timeline row at ``now`` [s]: a hold step's (``torques`` given; ``solver`` the IK
+    solver that gave the posture, or ``recorded``) or a rest step's (None: the last held
+    posture ``q`` [rad], NaN torques, no solver); the levels' ``residuals``."""
     idle = np.full(len(q), math.nan)
     return {
+        "time": now,
         "q": q,
         "effector": np.asarray(position(q)).ravel(),
         "external": idle if torques is None else torques.external,
@@ -633,14 +736,12 @@ def _row(
         "load": loads,
         "fatigue": levels,
         "fatigued": constraint.fatigued.copy(),
-        "owner": -1 if constraint.owner is None else constraint.owner,
+        "owner": -1 if constraint.owner is None or solver == RECORDED else constraint.owner,
         "goal": math.nan if goal is None else goal.angle,
         "case": "" if goal is None else goal.case,
-        "residuals": np.full(constraint.hierarchy.depth, math.nan)
-        if result is None
-        else result.residuals,
-        "solver": "" if result is None else result.solver,
-        "phase": "rest" if result is None else "hold",
+        "residuals": residuals,
+        "solver": solver,
+        "phase": "rest" if torques is None else "hold",
     }
 
 
@@ -684,9 +785,10 @@ def _rows(record: _Recorder, key: str, count: int, width: int | None) -> np.ndar
     return np.zeros((0,) if width is None else (0, width))
 
 
-def _tracked(hierarchy: TaskHierarchy) -> tuple[str, Line | None]:
-    """The effector of the highest-priority task that has one, and the first line task."""
-    tasks = [t for level in hierarchy.levels for t in level]
+def _tracked(problem: Problem, hierarchy: TaskHierarchy | None) -> tuple[str, Line | None]:
+    """The effector of the highest-priority task that has one (else the body's first
+    landmark), and the first line task."""
+    tasks = [] if hierarchy is None else [t for level in hierarchy.levels for t in level]
     effectors = [t.effector for t in tasks if hasattr(t, "effector")]
     line = next((t for t in tasks if isinstance(t, Line)), None)
-    return (effectors[0] if effectors else next(iter(hierarchy.body.landmarks))), line
+    return (effectors[0] if effectors else next(iter(problem.body.landmarks))), line

@@ -23,6 +23,7 @@ FLOORS = {
     "ik": 5,
     "problem": 6,
     "ergonomics": 6,
+    "motion": 6,
     "static": 7,
     "adjustment": 7,
     "simulation": 8,

@@ -1,6 +1,6 @@
 """The ``casadi-posture`` command line: the group and its commands, one module per kind."""
 
-from casadi_posture.cli import design, ik, model, runs, schedule, sensitivity
+from casadi_posture.cli import design, ik, model, motion, runs, schedule, sensitivity
 from casadi_posture.cli.common import main
 
-__all__ = ["design", "ik", "main", "model", "runs", "schedule", "sensitivity"]
+__all__ = ["design", "ik", "main", "model", "motion", "runs", "schedule", "sensitivity"]

@@ -126,7 +126,7 @@ def simulate(
         )
         api.check_out(out, force=force)
         run = api.simulate(resolved, solver)
-        files = _write(run, out, command_line(), report=not no_report)
+        files = write_run(run, out, command_line(), report=not no_report)
         if animate is not None:
             drawn = run.animate(out / f"animation.{animate}", force=True)
             files += [drawn] if drawn else []
@@ -167,7 +167,7 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
             key = f"problem_data.{error.key}"
             raise ProblemError(path, key, error.value, error.expected) from None
         run = api.simulate(resolved, record["solver"])
-        files = _write(run, out, command_line())
+        files = write_run(run, out, command_line())
     code = _report(run, files, law(resolved))
     original = path.parent / "summary.json"
     if not original.exists():
@@ -189,10 +189,16 @@ def _manifest(path: Path) -> dict[str, Any]:
     missing = [k for k in ("problem_data", "problem_path", "solver") if k not in record]
     if not isinstance(record, dict) or missing:
         raise ProblemError(path, None, None, "a manifest.json written by simulate")
+    if "recording" in record:
+        expected = (
+            "a manifest.json written by simulate (this one is evaluate's: run "
+            f"casadi-posture evaluate again with --motion {record['recording']['source']})"
+        )
+        raise ProblemError(path, "recording", MISSING, expected)
     return record
 
 
-def _write(
+def write_run(
     run: api.Simulation, out: Path, command: list[str], *, report: bool = True
 ) -> list[Path]:
     """The run's files, figures and (with ``report``) report.html; a report that cannot be
@@ -272,6 +278,15 @@ def _report(
             f"most {tired:.2f} fatigue; --all prints every row"
         )
     click.echo()
+    return echo_outcome(run, report, files, show_all)
+
+
+def echo_outcome(
+    run: api.Simulation, report: dict[str, Any], files: list[Path], show_all: bool = False
+) -> int:
+    """Print a run's outcome (its ``summary``: what tired and gave out, recoveries,
+    plausibility, RULA/REBA, the low back, the flags) and its files; its exit code."""
+    result = run.result
     for line in outcome_lines(report):
         click.echo(line)
     recoveries = report["recovery_postures"]

@@ -22,9 +22,13 @@ TITLE_WIDTH = 70
 
 
 def title(result: SimulationResult, width: int = TITLE_WIDTH) -> str:
-    """Problem, strategy and solver, and whether the run was cut short, wrapped at
-    ``width`` characters (the default fits a figure 8 inches wide at 12 points)."""
-    text = f"{result.problem.path.stem}: {result.settings.describe()}, {result.solver}"
+    """Problem, strategy and solver (a replay: the recording), and whether the run was cut
+    short, wrapped at ``width`` characters (the default fits a figure 8 inches wide at 12
+    points)."""
+    if result.recording is not None:
+        text = f"{result.problem.path.stem}: recorded motion {result.recording.source.name}"
+    else:
+        text = f"{result.problem.path.stem}: {result.settings.describe()}, {result.solver}"
     if result.stop == "interrupted":
         text += " (interrupted: partial run)"
     elif result.stop == "never_held":

@@ -38,6 +38,8 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
     ]
     if report["stop"] == "interrupted" and not report["solver_statistics"]["steps"]:
         lines.append("task: no step was run")
+    elif task.get("recorded"):
+        lines.append(_recorded(task))
     elif not task["held_at_start"]:
         lines.append(f"task never held: {task['lost']['reason'] if task['lost'] else 'no step'}")
     elif task["lost"]:
@@ -53,3 +55,18 @@ def outcome_lines(report: dict[str, Any]) -> list[str]:
             f"{s['time_holding_s']:g} s holding, {s['time_resting_s']:g} s resting"
         )
     return lines
+
+
+def _recorded(task: dict[str, Any]) -> str:
+    """How long the model's groups hold a recorded motion, and how far it is from level 1."""
+    if task["lost"]:
+        held = f"the model's groups hold the recording {time_text(task['held_s'])}: "
+        held += task["lost"]["reason"]
+    else:
+        held = f"the model's groups hold the whole recording ({time_text(task['held_s'])})"
+    if task["level1"] is None:
+        return held
+    return (
+        f"{held}; level 1 ({task['level1']}) residual {task['level1_residual_at_start']:.3g} "
+        f"{task['level1_unit']} at the first frame, {task['level1_residual_max']:.3g} at most"
+    )

@@ -81,9 +81,13 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         key=lambda g: (g["initial_endurance_min"], -g["initial_load_pct_mvc"]),
         default=None,
     )
+    if result.recording is not None:
+        _add_recorded_loads(groups, tl.time, tl.load)
     regions = {h.name: h.region for h in body.half_joints}
     crossings = [e for e in result.events if e.kind == "fatigue_threshold"]
     exhausted = next((e for e in result.events if e.kind == "exhausted"), None)
+    cycle_end = "constraint_off" if result.recording is None else "recovery_threshold"
+    recorded = {} if result.recording is None else {"recording": recording_summary(result)}
     return {
         "problem": str(problem.path),
         "solver": result.solver,
@@ -121,8 +125,9 @@ def summary(result: SimulationResult) -> dict[str, Any]:
             "time_s": exhausted.time_s,
             "cause": exhausted.detail.split(":")[0],
         },
+        **recorded,
         "half_joints": groups,
-        "fatigue_recovery_cycles": sum(e.kind == "constraint_off" for e in result.events),
+        "fatigue_recovery_cycles": sum(e.kind == cycle_end for e in result.events),
         "recovery_postures": _recoveries(result),
         "task_not_held_events": sum(e.kind == "task_not_held" for e in result.events),
         "over_strength_events": sum(e.kind == "over_strength" for e in result.events),
@@ -169,8 +174,39 @@ def schedule_summary(result: SimulationResult) -> dict[str, Any] | None:
     }
 
 
+def _add_recorded_loads(groups: list[dict[str, Any]], time: np.ndarray, load: np.ndarray) -> None:
+    """A recording's load of each group over it [%MVC]: its peak and its mean over time."""
+    span = float(time[-1] - time[0]) if time.size > 1 else 0.0
+    for k, group in enumerate(groups):
+        values = load[:, k]
+        area = float(np.sum((values[1:] + values[:-1]) * np.diff(time))) / 2
+        mean = area / span if span > 0 else float(values[0])
+        group["peak_load_pct_mvc"] = float(values.max()) if values.size else None
+        group["mean_load_pct_mvc"] = float(mean) if values.size else None
+
+
+def recording_summary(result: SimulationResult) -> dict[str, Any]:
+    """Where a replay's postures came from: the file, its kind, its frames and times [s], what
+    reading did to them and the flags of the recording itself."""
+    recording = result.recording
+    assert recording is not None
+    return {
+        "source": str(recording.source),
+        "kind": recording.kind,
+        "frames": recording.frames,
+        "first_time_s": float(recording.time[0]),
+        "last_time_s": float(recording.time[-1]),
+        "notes": list(recording.notes),
+        "flags": list(recording.flags),
+    }
+
+
 def _task(result: SimulationResult) -> dict[str, Any]:
-    """Whether and how long the top priority level was held."""
+    """Whether and how long the top priority level was held; for a recording, how long the
+    model's groups hold the recorded motion (until the first is exhausted) and how far the
+    recorded postures are from the problem's level 1."""
+    if result.recording is not None:
+        return _recorded_task(result)
     tl = result.timeline
     ran = tl.time.size > 0
     simulated = float(tl.time[-1]) if ran else 0.0
@@ -202,6 +238,34 @@ def _task(result: SimulationResult) -> dict[str, Any]:
     }
 
 
+def _recorded_task(result: SimulationResult) -> dict[str, Any]:
+    tl = result.timeline
+    ran = tl.time.size > 0
+    start = float(tl.time[0]) if ran else 0.0
+    simulated = float(tl.time[-1]) - start if ran else 0.0
+    exhausted = next((e for e in result.events if e.kind == "exhausted"), None)
+    lost = None
+    if exhausted is not None:
+        lost = {
+            "time_s": exhausted.time_s,
+            "half_joint": exhausted.half_joint,
+            "reason": f"{exhausted.half_joint} exhausted ({exhausted.detail.split(':')[0]}) "
+            "while the recording goes on",
+        }
+    level = bool(result.level_names) and ran
+    return {
+        "recorded": True,
+        "level1": result.level_names[0] if result.level_names else None,
+        "level1_unit": result.level_units[0] if result.level_units else None,
+        "level1_residual_at_start": float(tl.residuals[0, 0]) if level else None,
+        "level1_residual_max": float(tl.residuals[:, 0].max()) if level else None,
+        "held_at_start": ran,
+        "held_s": (lost["time_s"] - start) if lost else simulated,
+        "held_s_is_lower_bound": lost is None,
+        "lost": lost,
+    }
+
+
 def flags(result: SimulationResult, plausible: dict[str, Any], back: dict[str, Any]) -> list[str]:
     """Why the run's answer cannot be used as it is, one line each (empty: it can);
     ``plausible`` is the run's ``plausibility_report``, ``back`` its ``low_back``."""
@@ -220,6 +284,14 @@ def flags(result: SimulationResult, plausible: dict[str, Any], back: dict[str, A
         names = ", ".join(start_over)
         out.append(f"over strength at the start ({names}): the posture cannot be held at all")
     out += run_flags(back)
+    if result.recording is not None:
+        out += list(result.recording.flags)
+        out += [
+            f"{e.half_joint} exhausted at {e.time_s:g} s by the model while the recording goes "
+            "on: the recorded worker is stronger, or rests more, than the model's person"
+            for e in result.events
+            if e.kind == "exhausted"
+        ]
     if result.ik_failures:
         out.append(f"{result.ik_failures} steps where neither IK solver converged (see events.csv)")
     out += plausible["flags"]
@@ -318,7 +390,7 @@ def manifest(result: SimulationResult, command: list[str] | None = None) -> dict
     """How the run was made, enough to repeat it (``casadi-posture rerun``): the command line,
     the overrides, the problem's data after them and its file's SHA-256, the solver and
     constraint settings, the versions, the time and, in a git checkout, the commit; the
-    resolved model; and the run's wall times."""
+    resolved model; the run's wall times; and a replay's recording."""
     problem = result.problem
     return {
         "created_utc": datetime.now(UTC).isoformat(timespec="seconds"),
@@ -346,6 +418,7 @@ def manifest(result: SimulationResult, command: list[str] | None = None) -> dict
             "share_outside_ik": 1.0 - result.ik_time_s / max(result.wall_time_s, 1e-12),
         },
         "resolved_problem": description(problem),
+        **({} if result.recording is None else {"recording": recording_summary(result)}),
     }
 
 

@@ -533,6 +533,18 @@ class ErgonomicsSpec(Strict):
         return self.model_dump(exclude_none=True)
 
 
+class MotionSpec(Strict):
+    """How a recorded motion maps onto the body (``casadi-posture evaluate``;
+    docs/motion.md): ``columns`` maps a joint-angle file's column names to DOFs (a column
+    named as a DOF, or as the DOF with ``_deg``, needs none); NaN gaps up to ``max_gap_s``
+    [s] are filled by linear interpolation and counted, longer ones filled and flagged;
+    ``hold_missing`` holds a DOF the file does not give at the problem's posture_deg."""
+
+    columns: dict[str, str] = {}
+    max_gap_s: Annotated[float, _between(0.0, 60.0)] = 0.25
+    hold_missing: bool = False
+
+
 class SolverSpec(Strict):
     """IK solver and its options; an option left out takes the solver's own default."""
 
@@ -562,3 +574,4 @@ class ProblemSpec(Strict):
     schedule: ScheduleSpec | None = None
     solver: SolverSpec = SolverSpec()
     ergonomics: ErgonomicsSpec = ErgonomicsSpec()
+    motion: MotionSpec = MotionSpec()

@@ -1,0 +1,160 @@
+"""The command that runs a recorded motion instead of the IK: evaluate."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from casadi_posture import api, interrupt
+from casadi_posture.cli.common import (
+    ALL_OPTION,
+    FORCE_OPTION,
+    SET_OPTION,
+    command_line,
+    main,
+    no_report_option,
+    problem_from,
+    shown_groups,
+)
+from casadi_posture.cli.runs import echo_outcome, write_run
+from casadi_posture.errors import ProblemError
+from casadi_posture.output.report import table
+from casadi_posture.static import law
+
+
+@main.command()
+@click.argument("problem", type=click.Path(dir_okay=False))
+@click.option(
+    "--motion",
+    type=click.Path(dir_okay=False, path_type=Path),
+    required=True,
+    help="The recording: a .csv or .parquet file of joint angles in degrees with a time "
+    "column in s (time_s or time), one column per DOF named as `describe` names it "
+    "(or shoulder_flexion_r_deg, as timeline.csv has it; other names mapped by the "
+    "problem's [motion.columns]).",
+)
+@click.option(
+    "--resample",
+    "resample_s",
+    type=float,
+    default=None,
+    help="Resample the recording every this many s (linear between frames) [default: the "
+    "file's own frames].",
+)
+@click.option(
+    "--repeat",
+    "repeat_times",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Play the recording this many times in a row, as a work cycle.",
+)
+@click.option(
+    "--until",
+    "until_s",
+    type=float,
+    default=None,
+    help="Play the recording as a work cycle until this many s.",
+)
+@click.option(
+    "--out",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: out/evaluate/<problem>-<motion>].",
+)
+@no_report_option("the recording in one page for a browser: the body in 3-D with a time slider")
+@ALL_OPTION
+@SET_OPTION
+@FORCE_OPTION
+def evaluate(
+    problem: str,
+    motion: Path,
+    resample_s: float | None,
+    repeat_times: int | None,
+    until_s: float | None,
+    out: Path | None,
+    no_report: bool,
+    show_all: bool,
+    sets: tuple[str, ...],
+    force: bool,
+) -> None:
+    """Drive the problem's body with a recorded motion instead of the IK: per frame the
+    torques at the recorded posture with the problem's loads, each group's load and
+    fatigue, recovery, the low back and RULA/REBA. Writes the files, figures and
+    report.html of `simulate` into the output folder (new or empty, or --force).
+
+    Nothing moves the posture: a group the model finds exhausted is an event and a flag,
+    and the recording goes on. Exit code 1 when the answer needs care (a flag: a long gap
+    in the recording, angles outside the body's range, a group exhausted by the model,
+    the low back above the NIOSH design limit), 2 on bad input, 130 on Ctrl-C (the files
+    then hold the frames so far).
+
+    \b
+    Example:
+      casadi-posture evaluate problems/standing_wall_horizontal.toml \\
+          --motion out/simulate/standing_wall_horizontal-active-nullspace/timeline.csv
+      casadi-posture evaluate problems/seated_assembly.toml --motion shift.csv --until 3600
+    """
+    if repeat_times is not None and until_s is not None:
+        raise ProblemError(None, "--repeat", repeat_times, "--repeat or --until, not both")
+    with interrupt.deferred():
+        resolved = problem_from(problem, sets=sets)
+        recording = api.read_motion(
+            resolved, motion, resample_s=resample_s, repeat_times=repeat_times, until_s=until_s
+        )
+        out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
+        api.check_out(out, force=force)
+        run = api.evaluate(resolved, recording)
+        files = write_run(run, out, command_line(), report=not no_report)
+    raise SystemExit(_report(run, files, law(resolved), show_all))
+
+
+def _report(run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool) -> int:
+    """Print what evaluate shows: the recording, the groups' loads over it (on a large body
+    the most loaded, unless ``show_all``), the outcome; its exit code."""
+    result, report = run.result, run.summary()
+    recorded = report["recording"]
+    click.echo(
+        f"{result.problem.path} driven by {recorded['source']}: {recorded['frames']} frames, "
+        f"{recorded['first_time_s']:g} to {recorded['last_time_s']:g} s; "
+        f"{result.wall_time_s:.2f} s wall"
+    )
+    for note in recorded["notes"]:
+        click.echo(f"  {note}")
+    click.echo(f"recovery law: {recovery_law}")
+    click.echo(f"endurance rule: {report['endurance_rule']}\n")
+    groups = report["half_joints"]
+    keep = shown_groups(
+        [max(g["peak_load_pct_mvc"], 100 * g["max_fatigue"]) for g in groups],
+        [g["peak_load_pct_mvc"] > 100 for g in groups],
+        show_all,
+    )
+    header = [
+        "half-joint",
+        "mean load (%MVC)",
+        "peak load (%MVC)",
+        "first at fatigue threshold (s)",
+        "max fatigue",
+        "final fatigue",
+    ]
+    rows = [
+        [
+            g["half_joint"],
+            g["mean_load_pct_mvc"],
+            g["peak_load_pct_mvc"],
+            g["first_fatigue_threshold_s"],
+            g["max_fatigue"],
+            g["final_fatigue"],
+        ]
+        for g in (groups[k] for k in keep)
+    ]
+    click.echo(table(header, rows, digits=2))
+    hidden = [g for k, g in enumerate(groups) if k not in keep]
+    if hidden:
+        peak = max(g["peak_load_pct_mvc"] for g in hidden)
+        click.echo(
+            f"... {len(hidden)} more half-joints peak at most at {peak:.1f} %MVC; "
+            "--all prints every row"
+        )
+    click.echo()
+    return echo_outcome(run, report, files, show_all)

@@ -1,0 +1,146 @@
+"""A recorded motion on a body's DOFs, and what can be done to its frames before it drives the
+body: gaps filled, resampled to a step, repeated as a work cycle (docs/motion.md)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from casadi_posture.errors import ProblemError
+from casadi_posture.spec.schema import MAX_DURATION_S, MAX_STEPS
+
+#: The kinds of file a recording is read from.
+KINDS = ("angles", "bvh", "c3d")
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Frames of a recorded motion: ``time`` [s] strictly increasing, as in the file;
+    ``q`` [rad], one row per frame in the body's DOF order; the file and its kind; what
+    reading did to the frames (``notes``, e.g. gaps filled) and why an answer on them needs
+    care (``flags``, e.g. a long gap, angles outside the body's range)."""
+
+    source: Path
+    kind: str
+    time: np.ndarray
+    q: np.ndarray
+    notes: tuple[str, ...] = ()
+    flags: tuple[str, ...] = ()
+
+    @property
+    def frames(self) -> int:
+        """The number of frames."""
+        return int(self.time.size)
+
+    @property
+    def duration_s(self) -> float:
+        """The time from the first frame to the last [s]."""
+        return float(self.time[-1] - self.time[0])
+
+    def noted(self, *, notes: tuple[str, ...] = (), flags: tuple[str, ...] = ()) -> Recording:
+        """The same frames with more notes and flags."""
+        return replace(self, notes=self.notes + notes, flags=self.flags + flags)
+
+
+def check_times(time: np.ndarray, source: Path, column: str) -> None:
+    """Frame times [s]: finite and strictly increasing, at least two; else a one-line error
+    naming the first bad frame (counted from 1, as a spreadsheet's data rows are)."""
+    if time.size < 2:
+        raise ProblemError(source, column, int(time.size), "at least two frames")
+    bad = np.flatnonzero(~np.isfinite(time))
+    if bad.size:
+        frame = int(bad[0])
+        raise ProblemError(source, f"{column} (frame {frame + 1})", "NaN", "a time in s")
+    steps = np.diff(time)
+    back = np.flatnonzero(steps <= 0)
+    if back.size:
+        frame = int(back[0]) + 1
+        raise ProblemError(
+            source,
+            f"{column} (frame {frame + 1})",
+            float(time[frame]),
+            f"a time after the frame before ({time[frame - 1]:g} s): times strictly increasing",
+        )
+    if time[-1] - time[0] > MAX_DURATION_S:
+        expected = f"a recording of at most {MAX_DURATION_S:g} s"
+        raise ProblemError(source, column, float(time[-1] - time[0]), expected)
+
+
+def resample(recording: Recording, step_s: float) -> Recording:
+    """The recording at every ``step_s`` [s] from its first frame to its last, each DOF
+    interpolated linearly between the frames around it."""
+    if not (math.isfinite(step_s) and step_s > 0):
+        raise ProblemError(None, "--resample", step_s, "a step in s above 0")
+    count = math.floor(recording.duration_s / step_s + 1e-9) + 1
+    if count > MAX_STEPS:
+        expected = f"at most {MAX_STEPS} frames: a longer step (the recording is "
+        expected += f"{recording.duration_s:g} s)"
+        raise ProblemError(None, "--resample", step_s, expected)
+    if count < 2:
+        expected = f"a step shorter than the recording ({recording.duration_s:g} s)"
+        raise ProblemError(None, "--resample", step_s, expected)
+    time = recording.time[0] + step_s * np.arange(count)
+    q = np.column_stack([np.interp(time, recording.time, col) for col in recording.q.T])
+    note = f"resampled to {step_s:g} s steps: {count} frames from {recording.frames}"
+    return replace(recording, time=time, q=q, notes=(*recording.notes, note))
+
+
+def repeat(
+    recording: Recording, *, times: int | None = None, until_s: float | None = None
+) -> Recording:
+    """The recording played ``times`` times in a row, or as often as it takes to reach
+    ``until_s`` [s] after its first frame (the last cycle cut there): a work cycle. Each
+    cycle starts one frame step (the recording's median) after the last one ends, from the
+    recording's first posture."""
+    if (times is None) == (until_s is None):
+        raise ProblemError(None, "--repeat/--until", None, "one of the two")
+    period = recording.duration_s + float(np.median(np.diff(recording.time)))
+    if until_s is not None:
+        if not (math.isfinite(until_s) and 0 < until_s <= MAX_DURATION_S):
+            raise ProblemError(None, "--until", until_s, f"a time in s in (0, {MAX_DURATION_S:g}]")
+        times = max(1, math.ceil((until_s + 1e-9) / period))
+    assert times is not None
+    if times < 1 or times * recording.frames > MAX_STEPS:
+        expected = f"1 to {MAX_STEPS // recording.frames} repetitions of {recording.frames} frames"
+        raise ProblemError(None, "--repeat", times, expected)
+    offsets = period * np.arange(times)
+    time = (recording.time[None, :] + offsets[:, None]).ravel()
+    q = np.tile(recording.q, (times, 1))
+    if until_s is not None:
+        keep = time - recording.time[0] <= until_s + 1e-9
+        time, q = time[keep], q[keep]
+    jump = float(np.degrees(np.abs(recording.q[-1] - recording.q[0]).max()))
+    note = (
+        f"repeated as a work cycle of {period:g} s: {times} cycles, {time.size} frames; "
+        f"each cycle jumps back to the first frame's posture (largest change {jump:.1f}°)"
+    )
+    return replace(recording, time=time, q=q, notes=(*recording.notes, note))
+
+
+def fill_gaps(
+    values: np.ndarray, time: np.ndarray, max_gap_s: float
+) -> tuple[np.ndarray, list[tuple[int, int]], list[tuple[int, int]]]:
+    """One DOF's values with its NaN runs filled: linearly between the frames around a run,
+    with the nearest frame's value at either end. Returns the filled values and the runs
+    (first and last frame index) no longer than ``max_gap_s`` [s] and those longer (measured
+    from the last frame before the run to the first after, or the run's own span at an
+    end). All NaN: nothing can be filled (ValueError)."""
+    missing = np.isnan(values)
+    if not missing.any():
+        return values, [], []
+    if missing.all():
+        raise ValueError("no value at all")
+    known = np.flatnonzero(~missing)
+    filled = values.copy()
+    filled[missing] = np.interp(time[missing], time[known], values[known])
+    short, long = [], []
+    edges = np.diff(np.concatenate(([0], missing.astype(int), [0])))
+    for first, end in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        last = end - 1
+        before = time[first - 1] if first > 0 else time[first]
+        after = time[end] if end < time.size else time[last]
+        (short if after - before <= max_gap_s + 1e-12 else long).append((int(first), int(last)))
+    return filled, short, long

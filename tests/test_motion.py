@@ -1,0 +1,198 @@
+"""Recorded motion: joint-angle files read, repaired and replayed (casadi-posture evaluate)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import casadi_posture as cp
+from casadi_posture.cli import main
+from casadi_posture.errors import ProblemError
+from casadi_posture.motion.recording import Recording, fill_gaps, repeat, resample
+
+ARM = "problems/holding_horizontal.toml"
+STANDING = "problems/standing_wall_horizontal.toml"
+
+
+def _write_csv(path: Path, header: list[str], rows: list[list[object]]) -> Path:
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+    return path
+
+
+def _arm_csv(path: Path, shoulder: list[float], elbow: list[float], dt: float = 1.0) -> Path:
+    rows = [[k * dt, s, e] for k, (s, e) in enumerate(zip(shoulder, elbow, strict=True))]
+    return _write_csv(path, ["time_s", "shoulder_flexion", "elbow_flexion"], rows)
+
+
+@pytest.mark.parametrize(
+    ("name", "sets"), [(ARM, {}), (STANDING, {"simulation.duration_s": 300.0})]
+)
+def test_a_simulated_timeline_replays_to_the_same_torques_loads_and_fatigue(
+    name: str, sets: dict, tmp_path: Path
+) -> None:
+    """simulate → timeline.parquet → evaluate: the same torques, loads and fatigue to 1e-9
+    and the same threshold and exhaustion events (the CSV's 10 digits to 1e-8 relative)."""
+    problem = cp.load(name, sets)
+    run = cp.simulate(problem)
+    run.write(tmp_path / "run", figures=False, report=False)
+    simulated = run.result.timeline
+    for kind, tolerance in (("parquet", 1e-9), ("csv", 1e-8)):
+        replayed = cp.evaluate(problem, tmp_path / "run" / f"timeline.{kind}").result
+        tl = replayed.timeline
+        assert replayed.solver == "recorded" and set(tl.solver) == {"recorded"}
+        np.testing.assert_array_equal(tl.time, simulated.time)
+        for field in ("external", "passive", "active", "load", "fatigue"):
+            a, b = getattr(simulated, field), getattr(tl, field)
+            scale = 1.0 if kind == "parquet" else max(1.0, float(np.abs(a).max()))
+            assert np.abs(a - b).max() <= tolerance * scale, (kind, field)
+        # every level but a comfort level the whole-body adjustment weighs by fatigue
+        np.testing.assert_allclose(tl.residuals[:, :2], simulated.residuals[:, :2], atol=1e-7)
+        kinds = {"fatigue_threshold", "recovery_threshold", "exhausted"}
+        want = [(e.time_s, e.kind, e.half_joint) for e in run.result.events if e.kind in kinds]
+        got = [(e.time_s, e.kind, e.half_joint) for e in replayed.events]
+        assert got == want
+
+
+def test_fill_gaps_is_linear_inside_and_nearest_at_the_ends() -> None:
+    time = np.arange(10.0) * 0.1
+    values = 3.0 * time + 1.0
+    holed = values.copy()
+    holed[[0, 3, 4, 8]] = math.nan
+    filled, short, long = fill_gaps(holed, time, max_gap_s=0.3)
+    np.testing.assert_allclose(filled[1:9], values[1:9], atol=1e-12)
+    assert filled[0] == values[1]  # nothing before: the nearest frame's value
+    assert short == [(0, 0), (3, 4), (8, 8)] and long == []
+    _, short, long = fill_gaps(holed, time, max_gap_s=0.25)
+    assert (3, 4) in long and (8, 8) in short
+
+
+def test_resample_and_repeat() -> None:
+    """A linear motion resampled stays on its line; repeated cycles restart a step apart."""
+    time = np.array([0.0, 0.5, 2.0, 3.0])
+    q = np.column_stack([time * 0.1, -time])
+    recording = Recording(Path("m.csv"), "angles", time, q)
+    fine = resample(recording, 0.25)
+    np.testing.assert_allclose(fine.time, np.arange(13) * 0.25)
+    np.testing.assert_allclose(fine.q[:, 0], fine.time * 0.1, atol=1e-15)
+    step = float(np.median(np.diff(time)))  # 1.0
+    twice = repeat(recording, times=2)
+    np.testing.assert_allclose(twice.time[4:], time + 3.0 + step)
+    np.testing.assert_array_equal(twice.q[4:], q)
+    until = repeat(recording, until_s=6.0)
+    assert until.time[-1] <= 6.0 < until.time[-1] + 1.0 and "repeated" in until.notes[-1]
+    with pytest.raises(ProblemError, match="--resample"):
+        resample(recording, 10.0)
+
+
+def test_a_recording_s_loads_are_its_own(tmp_path: Path) -> None:
+    """The arm held at 90° shoulder flexion then dropped to hanging: the load and the
+    recovery follow the frames (the hanging arm carries nothing of the shoulder flexors)."""
+    shoulder = [90.0] * 200 + [0.0] * 400
+    path = _arm_csv(tmp_path / "m.csv", shoulder, [0.0] * 600)
+    run = cp.evaluate(cp.load(ARM), path)
+    summary = run.summary()
+    k = next(
+        i for i, g in enumerate(summary["half_joints"]) if g["half_joint"] == "shoulder_flexors"
+    )
+    group = summary["half_joints"][k]
+    tl = run.result.timeline
+    assert tl.load[0, k] == pytest.approx(group["peak_load_pct_mvc"])
+    assert tl.load[-1, k] == pytest.approx(0.0, abs=1e-9)
+    held = tl.load[0, k] * 199 + tl.load[199, k] / 2 * 1 + tl.load[200, k] / 2
+    assert group["mean_load_pct_mvc"] == pytest.approx(held / 599, rel=1e-9)
+    assert tl.fatigue[-1, k] < tl.fatigue[199, k]  # recovers once the arm hangs
+    assert summary["recording"]["frames"] == 600 and summary["task"]["recorded"]
+
+
+@pytest.mark.parametrize(
+    ("header", "rows", "message"),
+    [
+        (["t", "shoulder_flexion", "elbow_flexion"], [[0, 1, 2], [1, 1, 2]], "time_s"),
+        (["time_s", "shoulder_flexion"], [[0, 10], [1, 20]], "elbow_flexion"),
+        (
+            ["time_s", "shoulder_flexion", "elbow_flexon"],
+            [[0, 10, 20], [1, 10, 20]],
+            "did you mean",
+        ),
+        (["time_s", "shoulder_flexion", "elbow_flexion"], [[0, 10, 20], [0, 10, 20]], "frame 2"),
+        (["time_s", "shoulder_flexion", "elbow_flexion"], [[0, 10, "x"], [1, 10, 20]], "frame 1"),
+        (["time_s", "shoulder_flexion", "elbow_flexion"], [[0, 10, 20]], "two frames"),
+    ],
+)
+def test_bad_files_are_one_line_errors_with_exit_2(
+    header: list[str], rows: list[list[object]], message: str, tmp_path: Path
+) -> None:
+    path = _write_csv(tmp_path / "m.csv", header, rows)
+    result = CliRunner().invoke(
+        main, ["evaluate", ARM, "--motion", str(path), "--out", str(tmp_path / "o")]
+    )
+    assert result.exit_code == 2, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and str(path) in lines[0] and message in lines[0]
+    assert "Traceback" not in result.output
+
+
+def test_radians_are_refused(tmp_path: Path) -> None:
+    problem = cp.load(STANDING)
+    names = problem.body.dof_names
+    rows = [[k, *[0.3 * math.sin(k + i) for i in range(len(names))]] for k in range(5)]
+    path = _write_csv(tmp_path / "m.csv", ["time_s", *names], rows)
+    with pytest.raises(ProblemError, match="looks like radians"):
+        cp.evaluate(problem, path)
+
+
+def test_gaps_are_filled_counted_and_long_ones_flagged(tmp_path: Path) -> None:
+    shoulder = [45.0] * 20
+    elbow: list[object] = [30.0] * 20
+    elbow[3] = ""  # 0.2 s between the frames around it: filled and counted
+    for k in range(8, 14):
+        elbow[k] = ""  # 0.7 s between the frames around it: above max_gap_s, flagged
+    path = _arm_csv(tmp_path / "m.csv", shoulder, elbow, dt=0.1)  # type: ignore[arg-type]
+    recording = cp.read_motion(cp.load(ARM), path)
+    assert any("1 gap(s)" in n for n in recording.notes)
+    assert len(recording.flags) == 1 and "frames 9-14" in recording.flags[0]
+    run = cp.evaluate(cp.load(ARM), recording)
+    assert recording.flags[0] in run.summary()["flags"]
+
+
+def test_angles_outside_the_range_are_flagged_and_missing_dofs_can_be_held(
+    tmp_path: Path,
+) -> None:
+    path = _arm_csv(tmp_path / "m.csv", [45.0, 200.0], [30.0, 30.0])
+    recording = cp.read_motion(cp.load(ARM), path)
+    assert any("outside the body's range" in f for f in recording.flags)
+    path = _write_csv(tmp_path / "s.csv", ["time_s", "elbow_flexion"], [[0, 30], [1, 40]])
+    problem = cp.load(ARM, {"motion.hold_missing": True, "posture_deg.shoulder_flexion": 20.0})
+    recording = cp.read_motion(problem, path)
+    np.testing.assert_allclose(np.degrees(recording.q[:, 0]), 20.0)
+    assert any("held at the problem's posture" in n for n in recording.notes)
+
+
+def test_mapped_columns(tmp_path: Path) -> None:
+    path = _write_csv(tmp_path / "m.csv", ["time", "SHO", "ELB"], [[0, 10, 20], [1, 15, 25]])
+    problem = cp.load(ARM, {"motion.columns": {"SHO": "shoulder_flexion", "ELB": "elbow_flexion"}})
+    recording = cp.read_motion(problem, path)
+    np.testing.assert_allclose(np.degrees(recording.q), [[10, 20], [15, 25]])
+    wrong = cp.load(ARM, {"motion.columns": {"SHO": "shoulder_flexon"}})
+    with pytest.raises(ProblemError, match=r"motion\.columns\.SHO"):
+        cp.read_motion(wrong, path)
+
+
+def test_the_command_writes_the_run_s_files(tmp_path: Path) -> None:
+    path = _arm_csv(tmp_path / "m.csv", [90.0] * 30, [0.0] * 30, dt=0.5)
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        main, ["evaluate", ARM, "--motion", str(path), "--repeat", "3", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "90 frames, 0 to 44.5 s" in result.output
+    for name in ("timeline.csv", "summary.json", "events.csv", "report.html", "fatigue.png"):
+        assert (out / name).exists()
