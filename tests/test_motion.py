@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -196,3 +197,29 @@ def test_the_command_writes_the_run_s_files(tmp_path: Path) -> None:
     assert "90 frames, 0 to 44.5 s" in result.output
     for name in ("timeline.csv", "summary.json", "events.csv", "report.html", "fatigue.png"):
         assert (out / name).exists()
+
+
+def test_compare_prediction_sets_the_recording_beside_the_model(tmp_path: Path) -> None:
+    """A simulated hold with the elbow 10° more flexed throughout, as if recorded: beside
+    the prediction, the elbow differs by 10° RMS, the shoulder by 0; the predicted outcomes
+    are simulate's own."""
+    problem = cp.load(ARM)
+    run = cp.simulate(problem)
+    tl = run.result.timeline
+    shoulder, elbow = np.degrees(tl.q[:, 0]), np.degrees(tl.q[:, 1]) + 10.0
+    path = _arm_csv(tmp_path / "m.csv", shoulder.tolist(), elbow.tolist())
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        main, ["evaluate", ARM, "--motion", str(path), "--out", str(out), "--compare-prediction"]
+    )
+    assert result.exit_code in (0, 1), result.output
+    assert "recorded beside predicted" in result.output
+    rows = {r["dof"]: r for r in csv.DictReader((out / "prediction.csv").open())}
+    assert float(rows["elbow_flexion"]["rms_difference_deg"]) == pytest.approx(10.0, rel=1e-6)
+    assert float(rows["shoulder_flexion"]["rms_difference_deg"]) == pytest.approx(0.0, abs=1e-6)
+    outcomes = {
+        r["outcome"]: r for r in json.loads((out / "prediction.json").read_text())["outcomes"]
+    }
+    held = run.summary()["task"]["held_s"]
+    assert outcomes["task held (s)"]["predicted"] == pytest.approx(held)
+    assert (out / "predicted" / "summary.json").exists()

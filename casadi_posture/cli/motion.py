@@ -20,6 +20,12 @@ from casadi_posture.cli.common import (
 from casadi_posture.cli.runs import echo_outcome, write_run
 from casadi_posture.errors import ProblemError
 from casadi_posture.output.report import table
+from casadi_posture.runs.prediction import (
+    SHOWN_DOFS,
+    PredictionComparison,
+    compare_prediction,
+    write_prediction,
+)
 from casadi_posture.static import law
 
 
@@ -62,6 +68,14 @@ from casadi_posture.static import law
     default=None,
     help="Output folder [default: out/evaluate/<problem>-<motion>].",
 )
+@click.option(
+    "--compare-prediction",
+    "compare",
+    is_flag=True,
+    help="Also simulate the problem's own tasks over the same time and set the predicted "
+    "postures, fatigue and endurance beside the recorded ones (OUT/predicted/, "
+    "prediction.csv, prediction.json).",
+)
 @no_report_option("the recording in one page for a browser: the body in 3-D with a time slider")
 @ALL_OPTION
 @SET_OPTION
@@ -73,6 +87,7 @@ def evaluate(
     repeat_times: int | None,
     until_s: float | None,
     out: Path | None,
+    compare: bool,
     no_report: bool,
     show_all: bool,
     sets: tuple[str, ...],
@@ -106,7 +121,15 @@ def evaluate(
         api.check_out(out, force=force)
         run = api.evaluate(resolved, recording)
         files = write_run(run, out, command_line(), report=not no_report)
-    raise SystemExit(_report(run, files, law(resolved), show_all))
+        code = _report(run, files, law(resolved), show_all)
+        if compare and run.stop != "interrupted":
+            comparison = compare_prediction(resolved, run.result)
+            predicted = api.Simulation(comparison.predicted)
+            extra = write_run(predicted, out / "predicted", command_line(), report=not no_report)
+            extra += write_prediction(comparison, out)
+            _echo_prediction(comparison, extra)
+            code = code or (1 if comparison.predicted_summary["flags"] else 0)
+    raise SystemExit(code)
 
 
 def _report(run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool) -> int:
@@ -158,3 +181,33 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str, show_all:
         )
     click.echo()
     return echo_outcome(run, report, files, show_all)
+
+
+def _echo_prediction(comparison: PredictionComparison, files: list[Path]) -> None:
+    """Print the recorded and the predicted outcomes side by side, and the DOFs whose
+    postures differ most."""
+    click.echo("\nrecorded beside predicted (the problem's tasks simulated over the same time):")
+    rows = [[r["outcome"], r["recorded"], r["predicted"]] for r in comparison.outcomes()]
+    click.echo(table(["outcome", "recorded", "predicted"], rows, digits=2))
+    click.echo()
+    postures = comparison.postures()[:SHOWN_DOFS]
+    header = [
+        "dof",
+        "recorded first (deg)",
+        "predicted start (deg)",
+        "recorded mean (deg)",
+        "predicted mean (deg)",
+        "RMS difference (deg)",
+    ]
+    keys = [
+        "dof",
+        "recorded_first_deg",
+        "predicted_start_deg",
+        "recorded_mean_deg",
+        "predicted_mean_deg",
+        "rms_difference_deg",
+    ]
+    click.echo(table(header, [[r[k] for k in keys] for r in postures], digits=1))
+    for flag in comparison.predicted_summary["flags"]:
+        click.echo(f"FLAGGED (predicted): {flag}")
+    click.echo("files: " + ", ".join(str(f) for f in files))
