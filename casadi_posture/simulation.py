@@ -35,6 +35,7 @@ from casadi_posture.adjustment.reduced_torque import Goal
 from casadi_posture.adjustment.whole_body import WholeBodyAdjustment
 from casadi_posture.biomech.fatigue import FatigueModel
 from casadi_posture.biomech.torques import TorqueModel, Torques
+from casadi_posture.body.loads import LOAD_PARAMETERS
 from casadi_posture.body.support import Support
 from casadi_posture.data import parameters
 from casadi_posture.errors import ProblemError
@@ -68,7 +69,9 @@ class Timeline:
     for a body on its feet, the centre of mass's floor projection [m] (with the held loads)
     and its margin inside the support polygon [m] (body/support.py). A rest step repeats the
     last held posture, its effector and centre of mass (the relaxed posture is not
-    modelled); its loads are 0 and its torques and residuals NaN (nothing is held)."""
+    modelled); its loads are 0 and its torques and residuals NaN (nothing is held). ``held``:
+    per step, whether each of the problem's loads is held (a replay whose recording says so;
+    None: every load on every hold step)."""
 
     time: np.ndarray
     q: np.ndarray
@@ -87,6 +90,7 @@ class Timeline:
     solver: list[str]
     phase: list[Phase]
     balance: tuple[np.ndarray, np.ndarray] | None = None
+    held: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -305,6 +309,7 @@ def _replay(problem: Problem, recording: Recording) -> SimulationResult:
     started = time.perf_counter()
     run = _replay_setup(problem)
     state = _State(run.fatigue.initial_state(), recording.q[0].copy())
+    packed, width = run.torque_model.default_loads, LOAD_PARAMETERS
     gave_out = np.zeros(len(run.names), dtype=bool)
     for step, now in enumerate(recording.time.tolist()):
         if interrupt.requested():
@@ -313,7 +318,8 @@ def _replay(problem: Problem, recording: Recording) -> SimulationResult:
             break
         state.q = recording.q[step]
         dt = now - float(recording.time[step - 1]) if step else 0.0
-        loads, over, _ = _update_fatigue(run, state, step, now, dt)
+        held = None if recording.held is None else packed * np.repeat(recording.held[step], width)
+        loads, over, _ = _update_fatigue(run, state, step, now, dt, held)
         for k in np.flatnonzero((state.levels >= 1.0) & ~gave_out):
             cause = "load above strength" if k in over else "fatigue reached 1"
             detail = f"{cause}: the model's group gives out here; the recording goes on"
@@ -334,7 +340,15 @@ def _replay(problem: Problem, recording: Recording) -> SimulationResult:
             )
         )
     state.events = [e for e in state.events if e.kind not in ("constraint_on", "constraint_off")]
-    return _result(run, state, started, recording)
+    result = _result(run, state, started, recording)
+    if recording.held is None:
+        return result
+    steps = result.timeline.time.size
+    held = recording.held[:steps]
+    timeline = replace(
+        result.timeline, held=held, balance=_balance(problem, result.timeline.q, held)
+    )
+    return replace(result, timeline=timeline)
 
 
 def _replay_setup(problem: Problem) -> _Setup:
@@ -569,11 +583,17 @@ def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: fl
 
 
 def _update_fatigue(
-    run: _Setup, state: _State, step: int, now: float, dt: float
+    run: _Setup,
+    state: _State,
+    step: int,
+    now: float,
+    dt: float,
+    held: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, list[Event]]:
-    """Torques and fatigue at the new posture, over the ``dt`` [s] since the step before:
+    """Torques and fatigue at the new posture holding the loads ``held`` (the torque
+    model's parameter vector; None: every load), over the ``dt`` [s] since the step before:
     the loads [%MVC], groups over strength, events."""
-    state.torques = run.torque_model.evaluate(state.q)
+    state.torques = run.torque_model.evaluate(state.q, held)
     loads = state.torques.load_pct_mvc
     if step > 0:
         state.fatigue_state = run.fatigue.step(state.fatigue_state, loads, dt)
@@ -772,10 +792,30 @@ def _solve_step(
     return result, spent, ""
 
 
-def _balance(problem: Problem, postures: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """The centre of mass over the floor and its margin in the support polygon per step."""
-    carried = [(load.at, load.mass) for load in problem.loads if load.mass > 0]
-    return Support(problem.body).balance(postures, carried)
+def _balance(
+    problem: Problem, postures: np.ndarray, held: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The centre of mass over the floor and its margin in the support polygon per step,
+    with the loads each step holds (``held``: per step 0/1 per load; None: all)."""
+    support = Support(problem.body)
+    if held is None:
+        carried = [(load.at, load.mass) for load in problem.loads if load.mass > 0]
+        return support.balance(postures, carried)
+    out = None
+    for pattern in np.unique(held, axis=0):
+        steps = np.flatnonzero((held == pattern).all(axis=1))
+        carried = [
+            (load.at, load.mass)
+            for load, on in zip(problem.loads, pattern, strict=True)
+            if on and load.mass > 0
+        ]
+        part = support.balance(postures[steps], carried)
+        if part is None:
+            return None
+        if out is None:
+            out = (np.zeros((len(postures), part[0].shape[1])), np.zeros(len(postures)))
+        out[0][steps], out[1][steps] = part
+    return out
 
 
 def _rows(record: _Recorder, key: str, count: int, width: int | None) -> np.ndarray:

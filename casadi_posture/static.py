@@ -434,15 +434,20 @@ def plausibility(problem: Problem) -> Plausibility:
     return Plausibility(problem.body, tasks, problem.loads, neutral)
 
 
-def posture_scores(problem: Problem, q: Sequence[float]) -> tuple[SideScores, ...]:
-    """RULA and REBA per side of ``problem``'s body at ``q`` [rad] holding its loads, with
-    the file's ``[ergonomics]`` inputs; empty for a body the worksheets do not fit
-    (ergonomics/posture_scores.py)."""
+def posture_scores(
+    problem: Problem, q: Sequence[float], held: Sequence[float] | None = None
+) -> tuple[SideScores, ...]:
+    """RULA and REBA per side of ``problem``'s body at ``q`` [rad] holding its loads (those
+    ``held`` marks 1, one mark per load; None: all), with the file's ``[ergonomics]``
+    inputs; empty for a body the worksheets do not fit (ergonomics/posture_scores.py)."""
     if body_kind(problem.body) is None:
         return ()
-    return tuple(
-        score_posture(problem.body, q, problem.loads, Assumptions.of(problem.spec.ergonomics))
+    loads = (
+        problem.loads
+        if held is None
+        else [load for load, on in zip(problem.loads, held, strict=True) if on]
     )
+    return tuple(score_posture(problem.body, q, loads, Assumptions.of(problem.spec.ergonomics)))
 
 
 def low_back(problem: Problem, q: Sequence[float]) -> LowBack | None:

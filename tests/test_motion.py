@@ -223,3 +223,40 @@ def test_compare_prediction_sets_the_recording_beside_the_model(tmp_path: Path) 
     held = run.summary()["task"]["held_s"]
     assert outcomes["task held (s)"]["predicted"] == pytest.approx(held)
     assert (out / "predicted" / "summary.json").exists()
+
+
+def test_a_load_held_only_in_its_window(tmp_path: Path) -> None:
+    """Frames that do not hold the load carry the arm alone: their loads, compression-free
+    arm and RULA load score are those of the same problem with the load's mass set to 0."""
+    problem = cp.load(ARM)
+    q = np.radians(np.tile([60.0, 30.0], (6, 1)))
+    held = np.array([[1.0], [1.0], [0.0], [0.0], [1.0], [1.0]])
+    recording = Recording(Path("m.csv"), "angles", np.arange(6.0), q, held=held)
+    run = cp.evaluate(problem, recording)
+    tl = run.result.timeline
+    unloaded = cp.torques(
+        cp.load(ARM, {"loads[0].mass_kg": 0.0}), {"shoulder_flexion": 60.0, "elbow_flexion": 30.0}
+    )
+    loaded = cp.torques(problem, {"shoulder_flexion": 60.0, "elbow_flexion": 30.0})
+    for k, group in enumerate(g.name for g in unloaded.groups):
+        expected = [loaded.groups[k].load_pct_mvc] * 2 + [unloaded.groups[k].load_pct_mvc] * 2
+        np.testing.assert_allclose(tl.load[:4, k], expected, rtol=1e-12, err_msg=group)
+    columns = run.to_frame()
+    assert list(columns[f"held_{problem.loads[0].name}"]) == [1, 1, 0, 0, 1, 1]
+
+
+def test_the_low_back_and_scores_follow_the_held_loads() -> None:
+    """The seated worker's L5/S1 compression and RULA per frame: with the part, as the static
+    answer with it; without, as the static answer of the problem without it."""
+    name = "problems/seated_assembly.toml"
+    problem = cp.load(name)
+    q = np.tile(problem.posture, (4, 1))
+    held = np.array([[1.0], [0.0], [0.0], [1.0]])
+    run = cp.evaluate(problem, Recording(Path("m.csv"), "angles", np.arange(4.0), q, held=held))
+    frame = run.to_frame()
+    with_part = cp.torques(problem)
+    without = cp.torques(cp.load(name, {"loads[0].mass_kg": 0.0}))
+    expected = [with_part.low_back.compression, without.low_back.compression]
+    np.testing.assert_allclose(frame["compression_N"][:2], expected, rtol=1e-12)
+    rula = [with_part.scores[0].rula.grand, without.scores[0].rula.grand]
+    assert list(frame["rula_r"][:2]) == rula

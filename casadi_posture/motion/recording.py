@@ -21,7 +21,8 @@ class Recording:
     """Frames of a recorded motion: ``time`` [s] strictly increasing, as in the file;
     ``q`` [rad], one row per frame in the body's DOF order; the file and its kind; what
     reading did to the frames (``notes``, e.g. gaps filled) and why an answer on them needs
-    care (``flags``, e.g. a long gap, angles outside the body's range)."""
+    care (``flags``, e.g. a long gap, angles outside the body's range); which loads each
+    frame holds (``held``, from the problem's ``motion.held_s``)."""
 
     source: Path
     kind: str
@@ -29,6 +30,8 @@ class Recording:
     q: np.ndarray
     notes: tuple[str, ...] = ()
     flags: tuple[str, ...] = ()
+    #: Per frame, whether each of the problem's loads is held (1) or not (0); None: all held.
+    held: np.ndarray | None = None
 
     @property
     def frames(self) -> int:
@@ -84,8 +87,12 @@ def resample(recording: Recording, step_s: float) -> Recording:
         raise ProblemError(None, "--resample", step_s, expected)
     time = recording.time[0] + step_s * np.arange(count)
     q = np.column_stack([np.interp(time, recording.time, col) for col in recording.q.T])
+    held = recording.held
+    if held is not None:
+        before = np.searchsorted(recording.time, time + 1e-9, side="right") - 1
+        held = held[before]
     note = f"resampled to {step_s:g} s steps: {count} frames from {recording.frames}"
-    return replace(recording, time=time, q=q, notes=(*recording.notes, note))
+    return replace(recording, time=time, q=q, held=held, notes=(*recording.notes, note))
 
 
 def repeat(
@@ -109,15 +116,36 @@ def repeat(
     offsets = period * np.arange(times)
     time = (recording.time[None, :] + offsets[:, None]).ravel()
     q = np.tile(recording.q, (times, 1))
+    held = None if recording.held is None else np.tile(recording.held, (times, 1))
     if until_s is not None:
         keep = time - recording.time[0] <= until_s + 1e-9
         time, q = time[keep], q[keep]
+        held = None if held is None else held[keep]
     jump = float(np.degrees(np.abs(recording.q[-1] - recording.q[0]).max()))
     note = (
         f"repeated as a work cycle of {period:g} s: {times} cycles, {time.size} frames; "
         f"each cycle jumps back to the first frame's posture (largest change {jump:.1f}°)"
     )
-    return replace(recording, time=time, q=q, notes=(*recording.notes, note))
+    return replace(recording, time=time, q=q, held=held, notes=(*recording.notes, note))
+
+
+def held_frames(
+    time: np.ndarray, windows: dict[str, list[list[float]]], loads: list[str], problem: Path
+) -> np.ndarray | None:
+    """Per frame at ``time`` [s], 1 for each of ``loads`` (names, in the problem's order)
+    held then, 0 if not: a load named in ``windows`` is held within its [start, end] [s]
+    intervals only, any other throughout; None when ``windows`` is empty (all held)."""
+    if not windows:
+        return None
+    held = np.ones((time.size, len(loads)))
+    for name, intervals in windows.items():
+        if name not in loads:
+            raise ProblemError(problem, f"motion.held_s.{name}", name, f"one of the loads {loads}")
+        inside = np.zeros(time.size, dtype=bool)
+        for start, end in intervals:
+            inside |= (time >= start - 1e-9) & (time <= end + 1e-9)
+        held[:, loads.index(name)] = inside
+    return held
 
 
 def fill_gaps(

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from casadi_posture.biomech.low_back import MODEL, OUTPUTS, LowBack, limits, low_back_model
+from casadi_posture.body.loads import LOAD_PARAMETERS
 from casadi_posture.output.per_run import once_per_run
 from casadi_posture.simulation import SimulationResult
 from casadi_posture.static import compression_flags
@@ -95,9 +96,9 @@ class StepLoads:
 
 @once_per_run
 def step_low_back(result: SimulationResult) -> StepLoads | None:
-    """The compression and shear at every step of a run holding its loads, from one batched
-    call of the compiled model over the stacked postures; None for a body without a lumbar
-    joint."""
+    """The compression and shear at every step of a run holding its loads (a recording: the
+    loads each frame holds), from one batched call of the compiled model over the stacked
+    postures; None for a body without a lumbar joint."""
     tl, problem = result.timeline, result.problem
     model = low_back_model(problem.body, problem.loads)
     steps = None
@@ -105,7 +106,10 @@ def step_low_back(result: SimulationResult) -> StepLoads | None:
         n = tl.time.size
         values = np.full((2, n), np.nan)
         if n:
-            out = model.function.map(n)(tl.q.T, model.default_loads)
+            loads = model.default_loads
+            if tl.held is not None:  # a recording: each step with the loads it holds
+                loads = (tl.held.repeat(LOAD_PARAMETERS, axis=1) * loads).T
+            out = model.function.map(n)(tl.q.T, loads)
             for row, name in enumerate(("compression", "shear")):
                 values[row] = np.asarray(out[OUTPUTS.index(name)], dtype=float).ravel()
             values[:, [phase == "rest" for phase in tl.phase]] = np.nan

@@ -487,6 +487,9 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     for k, unit in enumerate(result.level_units):
         columns[f"residual_level{k + 1}_{unit.replace(', ', '_')}"] = _numbers(tl.residuals[:, k])
     columns["ik_solver"] = [s or None for s in tl.solver]
+    if tl.held is not None:
+        for j, load in enumerate(result.problem.loads):
+            columns[f"held_{load.name}"] = [int(v) for v in tl.held[:, j]]
     if tl.balance is not None:
         ground, margins = tl.balance
         columns["com_x_m"] = ground[:, 0].tolist()

@@ -67,18 +67,20 @@ def _toml(value: Any) -> str:
 
 @once_per_run
 def step_scores(result: SimulationResult) -> list[Scores | None]:
-    """RULA and REBA per side at every step of a run holding its loads (None on a rest step:
-    the relaxed posture is not modelled). A posture met before is not scored again."""
+    """RULA and REBA per side at every step of a run holding its loads (a recording: those
+    each frame holds; None on a rest step: the relaxed posture is not modelled). A posture
+    met before with the same loads is not scored again."""
     tl, problem = result.timeline, result.problem
     seen: dict[bytes, Scores] = {}
     out: list[Scores | None] = []
-    for q, phase in zip(tl.q, tl.phase, strict=True):
+    held = [None] * tl.time.size if tl.held is None else list(tl.held)
+    for q, phase, loads in zip(tl.q, tl.phase, held, strict=True):
         if phase == "rest":
             out.append(None)
             continue
-        key = q.tobytes()
+        key = q.tobytes() + (b"" if loads is None else loads.tobytes())
         if key not in seen:
-            seen[key] = posture_scores(problem, q)
+            seen[key] = posture_scores(problem, q, loads)
         out.append(seen[key])
     return out
 
