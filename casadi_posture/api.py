@@ -27,7 +27,8 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.motion.angles import read_angles
-from casadi_posture.motion.recording import Recording, repeat, resample
+from casadi_posture.motion.marker_ik import read_c3d_recording
+from casadi_posture.motion.recording import Recording, held_frames, repeat, resample
 from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
@@ -205,16 +206,34 @@ def read_motion(
     problem: Problem,
     motion: str | Path,
     *,
+    solver: str | None = None,
     resample_s: float | None = None,
     repeat_times: int | None = None,
     until_s: float | None = None,
 ) -> Recording:
     """A recorded motion on the problem's body (docs/motion.md): a CSV or Parquet file of
-    joint angles [deg] with a time column [s]; resampled every ``resample_s`` [s] if given,
-    then played ``repeat_times`` times or until ``until_s`` [s] as a work cycle."""
-    recording = read_angles(
-        Path(motion), problem.body, problem.spec.motion, problem.posture, problem.path
-    )
+    joint angles [deg] with a time column [s], or a C3D file of markers turned into joint
+    angles by the IK ``solver`` (default: the file's) with the problem's
+    ``[motion.markers]``; each load held in its ``motion.held_s`` windows; resampled every
+    ``resample_s`` [s] if given, then played ``repeat_times`` times or until ``until_s`` [s]
+    as a work cycle."""
+    path, spec = Path(motion), problem.spec.motion
+    if path.suffix.lower() == ".c3d":
+        check_solver(solver, problem.path)
+        recording, _ = read_c3d_recording(
+            path,
+            problem.body,
+            spec,
+            problem.posture,
+            solver or problem.spec.solver.name,
+            problem=problem.path,
+            solver_spec=problem.spec.solver if solver is None else None,
+        )
+    else:
+        recording = read_angles(path, problem.body, spec, problem.posture, problem.path)
+    names = [load.name for load in problem.loads]
+    held = held_frames(recording.time, spec.held_s, names, problem.path)
+    recording = replace(recording, held=held)
     if resample_s is not None:
         recording = resample(recording, resample_s)
     if repeat_times is not None or until_s is not None:
@@ -226,6 +245,7 @@ def evaluate(
     problem: Problem,
     motion: str | Path | Recording,
     *,
+    solver: str | None = None,
     resample_s: float | None = None,
     repeat_times: int | None = None,
     until_s: float | None = None,
@@ -233,13 +253,19 @@ def evaluate(
     """The problem's body driven by a recorded motion instead of the IK: the torques, loads,
     fatigue, recovery, low back and RULA/REBA of every frame, as ``simulate`` gives them for
     predicted postures (``motion``: a file, read by ``read_motion`` with the other
-    arguments, or a ``Recording``). Nothing moves the posture: a group the model finds
-    exhausted is an event and a flag, and the recording goes on."""
+    arguments, or a ``Recording``; ``solver`` the marker IK's of a C3D file). Nothing moves
+    the posture: a group the model finds exhausted is an event and a flag, and the
+    recording goes on."""
     if isinstance(motion, Recording):
         recording = motion
     else:
         recording = read_motion(
-            problem, motion, resample_s=resample_s, repeat_times=repeat_times, until_s=until_s
+            problem,
+            motion,
+            solver=solver,
+            resample_s=resample_s,
+            repeat_times=repeat_times,
+            until_s=until_s,
         )
     return Simulation(replay(problem, recording))
 

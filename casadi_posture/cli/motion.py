@@ -11,6 +11,7 @@ from casadi_posture.cli.common import (
     ALL_OPTION,
     FORCE_OPTION,
     SET_OPTION,
+    SOLVER_OPTION,
     command_line,
     main,
     no_report_option,
@@ -38,8 +39,10 @@ from casadi_posture.static import law
     help="The recording: a .csv or .parquet file of joint angles in degrees with a time "
     "column in s (time_s or time), one column per DOF named as `describe` names it "
     "(or shoulder_flexion_r_deg, as timeline.csv has it; other names mapped by the "
-    "problem's [motion.columns]).",
+    "problem's [motion.columns]); or a .c3d file of markers, mapped to the body's "
+    "landmarks by the problem's [motion.markers] and turned into joint angles by the IK.",
 )
+@SOLVER_OPTION
 @click.option(
     "--resample",
     "resample_s",
@@ -83,6 +86,7 @@ from casadi_posture.static import law
 def evaluate(
     problem: str,
     motion: Path,
+    solver: str | None,
     resample_s: float | None,
     repeat_times: int | None,
     until_s: float | None,
@@ -115,7 +119,12 @@ def evaluate(
     with interrupt.deferred():
         resolved = problem_from(problem, sets=sets)
         recording = api.read_motion(
-            resolved, motion, resample_s=resample_s, repeat_times=repeat_times, until_s=until_s
+            resolved,
+            motion,
+            solver=solver,
+            resample_s=resample_s,
+            repeat_times=repeat_times,
+            until_s=until_s,
         )
         out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
         api.check_out(out, force=force)
@@ -144,6 +153,15 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str, show_all:
     )
     for note in recorded["notes"]:
         click.echo(f"  {note}")
+    fit = recorded["marker_residuals"]
+    if fit:
+        worst = max(fit, key=lambda k: fit[k]["max_m"])
+        median = max(v["median_m"] for v in fit.values())
+        click.echo(
+            f"  marker IK ({result.recording.kind}, {len(fit)} landmarks): median residual at "
+            f"most {median * 1e3:.1f} mm (a landmark's), largest {fit[worst]['max_m'] * 1e3:.1f} "
+            f"mm ({worst} at {fit[worst]['max_time_s']:g} s); per frame in timeline.csv"
+        )
     click.echo(f"recovery law: {recovery_law}")
     click.echo(f"endurance rule: {report['endurance_rule']}\n")
     groups = report["half_joints"]

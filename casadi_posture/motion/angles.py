@@ -169,10 +169,10 @@ def _dof_columns(
     so named is a one-line error (a misspelt DOF); any other is ignored."""
     for column, dof in spec.columns.items():
         if dof not in body.index:
-            expected = f"a DOF of the body: {_closest(dof, body.dof_names)}"
+            expected = f"a DOF of the body: {closest(dof, body.dof_names)}"
             raise ProblemError(problem, f"motion.columns.{column}", dof, expected)
         if column not in table:
-            expected = f"a column of {path} ({_closest(column, list(table))})"
+            expected = f"a column of {path} ({closest(column, list(table))})"
             raise ProblemError(problem, f"motion.columns.{column}", dof, expected)
     dofs: dict[str, str] = {}
     ignored: list[str] = []
@@ -185,7 +185,7 @@ def _dof_columns(
         elif stem in body.index:
             dof = stem
         elif difflib.get_close_matches(stem, body.dof_names, n=1, cutoff=TYPO_SIMILARITY):
-            close = _closest(stem, body.dof_names)
+            close = closest(stem, body.dof_names)
             expected = f"a column named after a DOF of the body: {close}"
             raise ProblemError(path, column, None, expected)
         else:
@@ -198,7 +198,7 @@ def _dof_columns(
     return dofs, ignored
 
 
-def _closest(name: str, choices: list[str]) -> str:
+def closest(name: str, choices: list[str]) -> str:
     """'did you mean' words for ``name`` among ``choices``."""
     close = difflib.get_close_matches(name, choices, n=1)
     return f"did you mean {close[0]!r}?" if close else f"one of {', '.join(choices[:8])}, ..."

@@ -4,6 +4,7 @@ body: gaps filled, resampled to a step, repeated as a work cycle (docs/motion.md
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -32,6 +33,8 @@ class Recording:
     flags: tuple[str, ...] = ()
     #: Per frame, whether each of the problem's loads is held (1) or not (0); None: all held.
     held: np.ndarray | None = None
+    #: A marker recording's fit: per landmark, its distance from its markers per frame [m].
+    residuals: dict[str, np.ndarray] | None = None
 
     @property
     def frames(self) -> int:
@@ -91,8 +94,18 @@ def resample(recording: Recording, step_s: float) -> Recording:
     if held is not None:
         before = np.searchsorted(recording.time, time + 1e-9, side="right") - 1
         held = held[before]
+    residuals = _each(recording.residuals, lambda r: np.interp(time, recording.time, r))
     note = f"resampled to {step_s:g} s steps: {count} frames from {recording.frames}"
-    return replace(recording, time=time, q=q, held=held, notes=(*recording.notes, note))
+    return replace(
+        recording, time=time, q=q, held=held, residuals=residuals, notes=(*recording.notes, note)
+    )
+
+
+def _each(
+    residuals: dict[str, np.ndarray] | None, change: Callable[[np.ndarray], np.ndarray]
+) -> dict[str, np.ndarray] | None:
+    """A marker fit's residuals, each landmark's changed alike (None stays None)."""
+    return None if residuals is None else {k: change(v) for k, v in residuals.items()}
 
 
 def repeat(
@@ -117,16 +130,20 @@ def repeat(
     time = (recording.time[None, :] + offsets[:, None]).ravel()
     q = np.tile(recording.q, (times, 1))
     held = None if recording.held is None else np.tile(recording.held, (times, 1))
+    residuals = _each(recording.residuals, lambda r: np.tile(r, times))
     if until_s is not None:
         keep = time - recording.time[0] <= until_s + 1e-9
         time, q = time[keep], q[keep]
         held = None if held is None else held[keep]
+        residuals = _each(residuals, lambda r: r[keep])
     jump = float(np.degrees(np.abs(recording.q[-1] - recording.q[0]).max()))
     note = (
         f"repeated as a work cycle of {period:g} s: {times} cycles, {time.size} frames; "
         f"each cycle jumps back to the first frame's posture (largest change {jump:.1f}°)"
     )
-    return replace(recording, time=time, q=q, held=held, notes=(*recording.notes, note))
+    return replace(
+        recording, time=time, q=q, held=held, residuals=residuals, notes=(*recording.notes, note)
+    )
 
 
 def held_frames(

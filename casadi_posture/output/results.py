@@ -187,9 +187,18 @@ def _add_recorded_loads(groups: list[dict[str, Any]], time: np.ndarray, load: np
 
 def recording_summary(result: SimulationResult) -> dict[str, Any]:
     """Where a replay's postures came from: the file, its kind, its frames and times [s], what
-    reading did to them and the flags of the recording itself."""
+    reading did to them, the flags of the recording itself and, for markers, each
+    landmark's distance from its markers after the fit (median, largest and when) [m]."""
     recording = result.recording
     assert recording is not None
+    fit = {
+        landmark: {
+            "median_m": float(np.median(residual)),
+            "max_m": float(residual.max()),
+            "max_time_s": float(recording.time[int(np.argmax(residual))]),
+        }
+        for landmark, residual in (recording.residuals or {}).items()
+    }
     return {
         "source": str(recording.source),
         "kind": recording.kind,
@@ -198,6 +207,7 @@ def recording_summary(result: SimulationResult) -> dict[str, Any]:
         "last_time_s": float(recording.time[-1]),
         "notes": list(recording.notes),
         "flags": list(recording.flags),
+        "marker_residuals": fit or None,
     }
 
 
@@ -490,6 +500,9 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     if tl.held is not None:
         for j, load in enumerate(result.problem.loads):
             columns[f"held_{load.name}"] = [int(v) for v in tl.held[:, j]]
+    fitted = result.recording.residuals if result.recording is not None else None
+    for landmark, residual in (fitted or {}).items():
+        columns[f"marker_residual_{landmark}_m"] = residual[: tl.time.size].tolist()
     if tl.balance is not None:
         ground, margins = tl.balance
         columns["com_x_m"] = ground[:, 0].tolist()

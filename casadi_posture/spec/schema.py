@@ -538,11 +538,35 @@ class MotionSpec(Strict):
     docs/motion.md): ``columns`` maps a joint-angle file's column names to DOFs (a column
     named as a DOF, or as the DOF with ``_deg``, needs none); NaN gaps up to ``max_gap_s``
     [s] are filled by linear interpolation and counted, longer ones filled and flagged;
-    ``hold_missing`` holds a DOF the file does not give at the problem's posture_deg."""
+    ``hold_missing`` holds a DOF the file does not give at the problem's posture_deg.
+    ``markers`` maps a landmark of the body to the C3D marker labels whose mean it is (at
+    least 3 landmarks); a frame whose landmark lies farther than ``max_marker_residual_m``
+    [m] from its markers after the fit is flagged. ``held_s`` gives, per load name, the
+    [start, end] windows [s] of the recording's time during which it is held (a load not
+    named is held throughout)."""
 
     columns: dict[str, str] = {}
     max_gap_s: Annotated[float, _between(0.0, 60.0)] = 0.25
     hold_missing: bool = False
+    markers: dict[str, Annotated[list[str], Field(min_length=1)]] = {}
+    max_marker_residual_m: Annotated[float, _between(0.001, 1.0)] = 0.02
+    held_s: dict[str, list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = {}
+
+    @field_validator("held_s")
+    @classmethod
+    def _windows(cls, value: dict[str, list[list[float]]]) -> dict[str, list[list[float]]]:
+        for name, windows in value.items():
+            for start, end in windows:
+                if not start < end:
+                    raise ValueError(f"{name}: a window [start, end] with start < end [s]")
+        return value
+
+    @field_validator("markers")
+    @classmethod
+    def _three_landmarks(cls, value: dict[str, list[str]]) -> dict[str, list[str]]:
+        if len(value) < 3:
+            raise ValueError("at least 3 landmarks, each mapped to a list of marker labels")
+        return value
 
 
 class SolverSpec(Strict):

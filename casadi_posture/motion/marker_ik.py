@@ -1,0 +1,251 @@
+"""C3D markers turned into joint angles by the package's own prioritized IK (docs/motion.md).
+
+Each frame, a landmark's target is the mean of its markers (``[motion.markers]``), in the
+lab frame. The body's root is fixed in the world, the subject moves in the lab: a rigid
+transform x = R m + t [m] brings the lab onto the body's frame. It is fitted in closed form
+(Kabsch) on the landmarks fixed to the root segment (carried by no DOF) alone, at least 3
+not on one line. Fitted on every landmark, the transform and the DOFs next to the root
+would trade against each other (a turn of the whole subject about the ankle is a turn of
+the leg's joints): the fit would be singular, or ill-conditioned and slow to alternate with
+the IK. Fitted on the root's landmarks, it is what they say, and the DOFs explain the rest.
+The price: the transform carries the noise of those few, close markers (a pelvis, a foot),
+and the DOFs next to the root carry it on; where a joint limit stops them, the landmarks
+beyond are off their markers, and flagged.
+
+Then the IK from the last frame's posture: level 1 the other landmarks at their targets
+(least squares over all of them), level 2 every DOF at the problem's posture, which only
+settles what the markers leave free (a hand's turn about its own axis); joint limits are
+the solver's. A landmark's residual is its distance from its target after the fit [m].
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.errors import MISSING, ProblemError
+from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.solvers import cached_solver
+from casadi_posture.ik.tasks import JointReference, Position
+from casadi_posture.motion.angles import closest
+from casadi_posture.motion.markers import Markers, read_c3d
+from casadi_posture.motion.recording import Recording, fill_gaps
+from casadi_posture.spec.schema import MotionSpec, SolverSpec
+
+#: The root's landmarks must lie at least this far [m] (RMS) off their best line.
+ROOT_SPREAD_M = 0.01
+#: Runs of frames whose residual is above the threshold flagged one by one, at most.
+MAX_FLAGGED_RUNS = 10
+
+
+@dataclass(frozen=True)
+class MarkerFit:
+    """How the body fits the markers per frame: ``residuals`` [m] (frames, landmarks), the
+    distance of each landmark of ``landmarks`` from its target; the transform from the lab
+    frame into the body's, x = ``rotation`` @ m + ``translation`` ((frames, 3, 3), (frames,
+    3) [m])."""
+
+    landmarks: tuple[str, ...]
+    residuals: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+
+
+def read_c3d_recording(
+    path: str | Path,
+    body: BodyModel,
+    spec: MotionSpec,
+    posture: np.ndarray,
+    solver_name: str,
+    *,
+    problem: Path,
+    solver_spec: SolverSpec | None = None,
+) -> tuple[Recording, MarkerFit]:
+    """The C3D file ``path`` as joint angles of ``body`` by the problem file ``problem``'s
+    ``[motion]`` (``spec``: the marker mapping, the gap and residual limits), ``posture``
+    [rad] (the lowest IK level) and the IK solver ``solver_name``."""
+    if not spec.markers:
+        expected = "a [motion.markers] table mapping landmarks to the C3D file's marker labels"
+        raise ProblemError(problem, "motion.markers", MISSING, expected)
+    return markers_to_recording(
+        read_c3d(path),
+        body,
+        spec.markers,
+        posture,
+        solver_name,
+        problem=problem,
+        max_gap_s=spec.max_gap_s,
+        max_residual_m=spec.max_marker_residual_m,
+        solver_spec=solver_spec,
+    )
+
+
+def markers_to_recording(
+    markers: Markers,
+    body: BodyModel,
+    mapping: Mapping[str, Sequence[str]],
+    posture: np.ndarray,
+    solver_name: str,
+    *,
+    problem: Path | None = None,
+    max_gap_s: float = 0.25,
+    max_residual_m: float = 0.02,
+    solver_spec: SolverSpec | None = None,
+) -> tuple[Recording, MarkerFit]:
+    """The joint angles [rad] per frame that fit ``body``'s landmarks to the means of their
+    markers (``mapping``: landmark → labels; ``problem`` names the file it came from),
+    ``posture`` [rad] settling what they leave free, by the IK solver ``solver_name``.
+    Marker gaps up to ``max_gap_s`` [s] are filled linearly and noted, longer ones filled and
+    flagged; so are frames whose largest residual exceeds ``max_residual_m`` [m]."""
+    roots = _check_mapping(markers, body, mapping, problem)
+    names = tuple(mapping)
+    lab, notes, flags = _targets(markers, mapping, max_gap_s)
+    moving = [n for n in names if n not in roots]
+    tasks = [Position(f"marker_{n}", 1, n, (0.0, 0.0, 0.0)) for n in moving]
+    posture_task = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
+    hierarchy = TaskHierarchy(body, [*tasks, posture_task])
+    solver = cached_solver(solver_name, hierarchy, solver_spec)
+    rows = [names.index(n) for n in moving]
+    root_rows = [names.index(n) for n in roots]
+    at_root = np.array([body.landmarks[n].position for n in roots], dtype=float)
+    frames = markers.time.size
+    q = np.empty((frames, body.n))
+    residuals = np.empty((frames, len(names)))
+    rotation, translation = np.empty((frames, 3, 3)), np.empty((frames, 3))
+    q_prev = np.asarray(posture, dtype=float)
+    failed: list[str] = []
+    for k in range(frames):
+        rotation[k], translation[k] = rigid_fit(lab[k, root_rows], at_root)
+        targets = lab[k] @ rotation[k].T + translation[k]
+        hierarchy.targets[: 3 * len(moving)] = targets[rows].ravel()
+        result = solver.solve(q_prev)
+        q[k] = q_prev = result.q
+        if not result.success:
+            failed.append(f"{k + 1} ({result.status})")
+        e1 = np.asarray(hierarchy.function(result.q, hierarchy.targets)[0]).reshape(-1, 3)
+        residuals[k, rows] = np.linalg.norm(e1, axis=1)
+        residuals[k, root_rows] = np.linalg.norm(targets[root_rows] - at_root, axis=1)
+    if failed:
+        shown = ", ".join(failed[:5]) + (f" and {len(failed) - 5} more" if len(failed) > 5 else "")
+        flags.append(
+            f"the {solver_name} IK did not converge in frame(s) {shown}: the posture there is "
+            "the best it reached"
+        )
+    flags += _residual_flags(residuals, markers.time, names, max_residual_m)
+    source = markers.source
+    by_landmark = {n: residuals[:, j] for j, n in enumerate(names)}
+    recording = Recording(
+        source, "c3d", markers.time, q, tuple(notes), tuple(flags), residuals=by_landmark
+    )
+    return recording, MarkerFit(names, residuals, rotation, translation)
+
+
+def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rotation R and translation t [m] minimising Σ‖R sᵢ + t − tᵢ‖² over the points
+    ``source`` onto ``target`` (k×3 each, k ≥ 3 not on one line): Kabsch's SVD solution,
+    a proper rotation (det R = +1)."""
+    s_mean, t_mean = source.mean(axis=0), target.mean(axis=0)
+    u, _, vt = np.linalg.svd((source - s_mean).T @ (target - t_mean))
+    flip = np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))])
+    r = vt.T @ flip @ u.T
+    return r, t_mean - r @ s_mean
+
+
+def _check_mapping(
+    markers: Markers, body: BodyModel, mapping: Mapping[str, Sequence[str]], problem: Path | None
+) -> list[str]:
+    """The mapped landmarks fixed to the root; a landmark not on the body, a label not in
+    the file (or in it twice), or too few root landmarks to fit the transform on, is a
+    one-line error."""
+    for name, labels in mapping.items():
+        key = f"motion.markers.{name}"
+        if name not in body.landmarks:
+            expected = f"a landmark of the body: {closest(name, list(body.landmarks))}"
+            raise ProblemError(problem, key, name, expected)
+        for label in labels:
+            count = markers.labels.count(label)
+            if count == 0:
+                close = closest(label, list(markers.labels))
+                expected = f"a marker label of {markers.source} ({close})"
+                raise ProblemError(problem, key, label, expected)
+            if count > 1:
+                expected = f"a label found once in {markers.source} (it is there {count} times)"
+                raise ProblemError(problem, key, label, expected)
+    fixed = [n for n, lm in body.landmarks.items() if lm.dof is None]
+    roots = [n for n in mapping if n in fixed]
+    points = np.array([body.landmarks[n].position for n in roots], dtype=float).reshape(-1, 3)
+    spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False) if roots else [0.0]
+    if len(roots) < 3 or spread[1] / np.sqrt(len(roots)) < ROOT_SPREAD_M:
+        expected = (
+            f"at least 3 of the landmarks fixed to the body's root, not on one line "
+            f"({', '.join(fixed)}; mapped: {', '.join(roots) or 'none'}): the transform from "
+            "the lab into the body's frame is fitted on them"
+        )
+        raise ProblemError(problem, "motion.markers", MISSING, expected)
+    if len(roots) == len(mapping):
+        expected = "a landmark moved by the body's DOFs too (all mapped ones are on its root)"
+        raise ProblemError(problem, "motion.markers", MISSING, expected)
+    return roots
+
+
+def _targets(
+    markers: Markers, mapping: Mapping[str, Sequence[str]], max_gap_s: float
+) -> tuple[np.ndarray, list[str], list[str]]:
+    """Each landmark's target in the lab [m] (frames, landmarks, 3), the mean of its markers
+    with their gaps filled (``fill_gaps``), and the notes and flags on the gaps."""
+    time = markers.time
+    filled: dict[str, np.ndarray] = {}
+    short_runs, flags = 0, []
+    for label in dict.fromkeys(label for labels in mapping.values() for label in labels):
+        try:
+            xyz = [fill_gaps(c, time, max_gap_s) for c in markers.marker(label).T]
+        except ValueError:
+            expected = f"a marker seen in at least one frame (missing from all {time.size})"
+            raise ProblemError(markers.source, label, MISSING, expected) from None
+        filled[label] = np.column_stack([c[0] for c in xyz])
+        _, short, long = xyz[0]
+        short_runs += len(short)
+        for first, last in long:
+            flags.append(
+                f"marker {label}: frames {first + 1}-{last + 1} ({time[first]:g}-{time[last]:g} s) "
+                f"missing for longer than motion.max_gap_s = {max_gap_s:g} s, filled linearly: "
+                "the posture there is not measured"
+            )
+    notes = []
+    if short_runs:
+        notes.append(
+            f"{short_runs} marker gap(s) of at most {max_gap_s:g} s filled by linear "
+            "interpolation; no frame skipped"
+        )
+    lab = np.stack([np.mean([filled[m] for m in labels], axis=0) for labels in mapping.values()])
+    return lab.transpose(1, 0, 2), notes, flags
+
+
+def _residual_flags(
+    residuals: np.ndarray, time: np.ndarray, names: tuple[str, ...], limit_m: float
+) -> list[str]:
+    """A flag per run of frames whose largest landmark residual exceeds ``limit_m`` [m],
+    naming its worst frame and landmark (at most ``MAX_FLAGGED_RUNS``, then a count)."""
+    worst = residuals.max(axis=1)
+    over = np.diff(np.concatenate(([0], (worst > limit_m).astype(int), [0])))
+    runs = list(zip(np.flatnonzero(over == 1), np.flatnonzero(over == -1) - 1, strict=True))
+    flags = []
+    for first, last in runs[:MAX_FLAGGED_RUNS]:
+        k = first + int(np.argmax(worst[first : last + 1]))
+        where, worst_of_run = f"frame {first + 1} ({time[first]:g} s)", ""
+        if last > first:
+            where = f"frames {first + 1}-{last + 1} ({time[first]:g}-{time[last]:g} s)"
+            worst_of_run = f" in frame {k + 1}, the worst of them"
+        flags.append(
+            f"{where}: {names[int(np.argmax(residuals[k]))]} {worst[k] * 1e3:.1f} mm from its "
+            f"markers{worst_of_run}, above motion.max_marker_residual_m = {limit_m * 1e3:g} mm: "
+            "the markers do not fit the body there"
+        )
+    if len(runs) > MAX_FLAGGED_RUNS:
+        more = len(runs) - MAX_FLAGGED_RUNS
+        flags.append(f"{more} more run(s) of frames with a landmark above {limit_m * 1e3:g} mm")
+    return flags

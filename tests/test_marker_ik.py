@@ -1,0 +1,339 @@
+"""C3D marker recordings read and turned into joint angles by the prioritized IK."""
+
+from __future__ import annotations
+
+import csv
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import casadi as ca
+import ezc3d
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import casadi_posture as cp
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.cli import main
+from casadi_posture.errors import ProblemError
+from casadi_posture.ik.solvers import SOLVER_NAMES
+from casadi_posture.ik.tasks import rotation_rpy
+from casadi_posture.motion.marker_ik import markers_to_recording, read_c3d_recording, rigid_fit
+from casadi_posture.motion.markers import Markers, read_c3d
+
+SEATED = "problems/seated_assembly.toml"
+STANDING = "problems/standing_wall_horizontal.toml"
+#: The landmarks mapped, each to one marker named after it, but the elbows: two markers
+#: 3 cm either side of the joint along the body's y axis, whose mean it is.
+LANDMARKS = (
+    "mid_hip", "l5s1", "hip_r", "hip_l", "c7", "vertex", "eyes", "shoulder_r", "shoulder_l",
+    "elbow_r", "elbow_l", "wrist_r", "wrist_l", "grip_r", "grip_l", "knuckles_r", "knuckles_l",
+)  # fmt: skip
+EPICONDYLE = np.array([0.0, 0.03, 0.0])
+#: The known posture [deg] of frame 1 (others from the problem's posture_deg); each DOF
+#: listed turns 1.5° more per frame. Within the ranges, the elbows bent (shoulder rotation
+#: then shows in the wrists), the hands straight (their turn about their axis is the
+#: problem's posture, which the lowest IK level holds).
+MOVED_DEG = {
+    "lumbar_flexion": 15.0, "lumbar_bending": 5.0, "lumbar_rotation": -10.0,
+    "shoulder_flexion_r": 40.0, "shoulder_abduction_r": 20.0, "shoulder_rotation_r": 10.0,
+    "elbow_flexion_r": 60.0, "shoulder_flexion_l": 30.0, "shoulder_abduction_l": 15.0,
+    "shoulder_rotation_l": -10.0, "elbow_flexion_l": 45.0,
+}  # fmt: skip
+#: And on the standing body, the legs (the left knee bent: the hip's rotation then shows).
+STANDING_DEG = {
+    "ankle_inversion_r": 3.0, "ankle_flexion_r": 5.0, "knee_flexion_r": 10.0,
+    "hip_rotation_r": 5.0, "hip_abduction_r": 4.0, "hip_flexion_r": 12.0,
+    "hip_flexion_l": 20.0, "hip_abduction_l": 5.0, "hip_rotation_l": -5.0,
+    "knee_flexion_l": 25.0, "ankle_flexion_l": -10.0, "ankle_inversion_l": 4.0,
+}  # fmt: skip
+FRAMES, RATE_HZ = 4, 100.0
+#: The lab frame: body = R · lab + t.
+R_LAB = rotation_rpy(0.1, -0.2, 2.5)
+T_LAB = np.array([0.1, -0.2, 0.9])
+
+
+@pytest.fixture(scope="module")
+def seated() -> cp.Problem:
+    return cp.load(SEATED)
+
+
+def _motion(problem: cp.Problem, moved_deg: dict[str, float]) -> np.ndarray:
+    """Postures [rad] of ``FRAMES`` frames: the problem's, but the DOFs of ``moved_deg`` at
+    their angle [deg] in frame 1 and 1.5° more in each frame after, within their range."""
+    body, q = problem.body, np.tile(problem.posture, (FRAMES, 1))
+    for dof, angle in moved_deg.items():
+        q[:, body.index[dof]] = np.radians(angle + 1.5 * np.arange(FRAMES))
+    assert np.all((q > body.lower + 0.1) & (q < body.upper - 0.1))
+    return q
+
+
+def _in_lab(body: BodyModel, names: tuple[str, ...], q: np.ndarray) -> np.ndarray:
+    """The landmarks ``names`` at postures ``q`` [rad] seen from the lab [m] (frames,
+    landmarks, 3)."""
+    at = ca.Function("at", [body.q], [ca.horzcat(*[body.landmark(n) for n in names]).T])
+    return np.array([(np.asarray(at(qk)) - T_LAB) @ R_LAB for qk in q])
+
+
+def _labels() -> tuple[list[str], dict[str, list[str]]]:
+    mapping = {n: [n.upper()] for n in LANDMARKS}
+    mapping["elbow_r"] = ["EPIC_R_LAT", "EPIC_R_MED"]
+    mapping["elbow_l"] = ["EPIC_L_MED", "EPIC_L_LAT"]
+    return [m for labels in mapping.values() for m in labels], mapping
+
+
+def _lab_markers(problem: cp.Problem, q: np.ndarray) -> np.ndarray:
+    """The markers [m] in the lab (frames, markers, 3), in the order of ``_labels``, from
+    the body's landmarks at postures ``q`` [rad]."""
+    x = _in_lab(problem.body, LANDMARKS, q)
+    columns = []
+    for i, name in enumerate(LANDMARKS):
+        offset = EPICONDYLE @ R_LAB if "elbow" in name else None
+        columns += [x[:, i]] if offset is None else [x[:, i] - offset, x[:, i] + offset]
+    return np.stack(columns, axis=1)
+
+
+def _write_c3d(path: Path, labels: list[str], lab_m: np.ndarray, units: str = "mm") -> Path:
+    """``lab_m`` [m] (frames, markers, 3) written in ``units`` with ezc3d (NaN: not seen)."""
+    c3d = ezc3d.c3d()
+    c3d["parameters"]["POINT"]["RATE"]["value"] = [RATE_HZ]
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = labels
+    c3d.add_parameter("POINT", "UNITS", [units])
+    points = np.ones((4, len(labels), lab_m.shape[0]))
+    points[:3] = lab_m.transpose(2, 1, 0) / {"mm": 1e-3, "cm": 1e-2, "m": 1.0}.get(units, 1.0)
+    c3d["data"]["points"] = points
+    c3d.write(str(path))
+    return path
+
+
+@pytest.fixture(scope="module")
+def recorded(seated: cp.Problem, tmp_path_factory: pytest.TempPathFactory) -> tuple:
+    """The known motion, its markers in the lab and the C3D file holding them in mm."""
+    q = _motion(seated, MOVED_DEG)
+    labels, mapping = _labels()
+    lab = _lab_markers(seated, q)
+    path = _write_c3d(tmp_path_factory.mktemp("c3d") / "seated.c3d", labels, lab)
+    return q, lab, mapping, path
+
+
+def _read(path: Path, problem: cp.Problem, solver: str):
+    """The C3D file as the problem's joint angles, as evaluate reads it."""
+    return read_c3d_recording(
+        path,
+        problem.body,
+        problem.spec.motion,
+        problem.posture,
+        solver,
+        problem=problem.path,
+        solver_spec=problem.spec.solver,
+    )
+
+
+def _problem(mapping: dict[str, list[str]]) -> cp.Problem:
+    return cp.load(SEATED, {"motion.markers": mapping})
+
+
+def _error(call: Callable[..., object], *args: object) -> str:
+    """The one-line message of the ProblemError ``call(*args)`` raises."""
+    with pytest.raises(ProblemError) as caught:
+        call(*args)
+    message = str(caught.value)
+    assert "\n" not in message
+    return message
+
+
+@pytest.mark.parametrize("solver", SOLVER_NAMES)
+def test_markers_of_a_known_motion_give_back_its_angles_and_the_lab_transform(
+    seated: cp.Problem, recorded: tuple, solver: str
+) -> None:
+    q, lab, mapping, path = recorded
+    recording, fit = _read(path, _problem(mapping), solver)
+    assert recording.kind == "c3d" and recording.source == path
+    np.testing.assert_allclose(recording.time, np.arange(FRAMES) / RATE_HZ)
+    # A C3D file holds float32: 0.7 m in mm to about 3e-8 m.
+    assert np.abs(recording.q - q).max() < 1e-6
+    assert np.abs(fit.rotation - R_LAB).max() < 1e-6
+    assert np.abs(fit.translation - T_LAB).max() < 1e-6
+    assert fit.landmarks == tuple(mapping) and fit.residuals.shape == (FRAMES, len(mapping))
+    assert fit.residuals.max() < 1e-6
+    assert recording.notes == () and recording.flags == ()
+    exact = Markers(path, recording.time, tuple(_labels()[0]), lab)
+    recording, fit = markers_to_recording(exact, seated.body, mapping, seated.posture, solver)
+    assert np.abs(recording.q - q).max() < 1e-7
+    assert np.abs(fit.rotation - R_LAB).max() < 1e-12
+    assert np.abs(fit.translation - T_LAB).max() < 1e-12
+
+
+@pytest.mark.parametrize("solver", SOLVER_NAMES)
+def test_the_standing_body_is_fitted_on_its_right_foot_and_recovered(solver: str) -> None:
+    problem = cp.load(STANDING)
+    body = problem.body
+    names = tuple(body.landmarks)
+    q = _motion(problem, MOVED_DEG | STANDING_DEG)
+    markers = Markers(
+        Path("standing.c3d"), np.arange(FRAMES) / RATE_HZ, names, _in_lab(body, names, q)
+    )
+    recording, fit = markers_to_recording(
+        markers, body, {n: [n] for n in names}, problem.posture, solver
+    )
+    assert np.abs(recording.q - q).max() < 1e-7
+    assert np.abs(fit.rotation - R_LAB).max() < 1e-12
+    assert np.abs(fit.translation - T_LAB).max() < 1e-12
+    assert fit.residuals.max() < 1e-8 and recording.flags == ()
+
+
+@pytest.mark.parametrize(("units", "metres"), [("mm", 1e-3), ("cm", 1e-2), ("m", 1.0)])
+def test_c3d_points_are_read_in_metres_and_a_point_not_seen_is_nan(
+    tmp_path: Path, units: str, metres: float
+) -> None:
+    written = np.arange(2 * 3 * 3, dtype=float).reshape(2, 3, 3) + 1.0
+    written[1, 2] = np.nan
+    written[0, 1] = 0.0
+    c3d = ezc3d.c3d()
+    c3d["header"]["points"]["first_frame"] = 9
+    c3d["parameters"]["POINT"]["RATE"]["value"] = [50.0]
+    c3d["parameters"]["POINT"]["LABELS"]["value"] = ["A", "B", "C"]
+    c3d.add_parameter("POINT", "UNITS", [units])
+    c3d["data"]["points"] = np.concatenate([written.transpose(2, 1, 0), np.ones((1, 3, 2))])
+    c3d.write(str(tmp_path / "units.c3d"))
+    markers = read_c3d(tmp_path / "units.c3d")
+    assert markers.labels == ("A", "B", "C")
+    np.testing.assert_allclose(markers.time, [9 / 50, 10 / 50])
+    expected = written * metres
+    expected[0, 1] = np.nan
+    np.testing.assert_allclose(markers.positions, expected, rtol=1e-6)
+
+
+def test_a_marker_moved_5_cm_in_one_frame_is_flagged_with_its_frame_and_landmark(
+    seated: cp.Problem, recorded: tuple, tmp_path: Path
+) -> None:
+    q, lab, mapping, _ = recorded
+    labels, _ = _labels()
+    moved = lab.copy()
+    moved[2, labels.index("VERTEX")] += R_LAB.T @ [0.0, 0.0, 0.05]
+    path = _write_c3d(tmp_path / "moved.c3d", labels, moved)
+    recording, fit = _read(path, _problem(mapping), "nullspace")
+    vertex = list(mapping).index("vertex")
+    assert fit.residuals[2, vertex] > 0.02
+    assert np.delete(fit.residuals, 2, axis=0).max() < 1e-6
+    (flag,) = recording.flags
+    assert flag.startswith(f"frame 3 (0.02 s): vertex {fit.residuals[2, vertex] * 1e3:.1f} mm")
+    assert np.abs(np.delete(recording.q - q, 2, axis=0)).max() < 1e-6
+
+
+@pytest.mark.parametrize("solver", SOLVER_NAMES)
+def test_markers_of_an_elbow_bent_backwards_leave_it_at_its_limit(
+    seated: cp.Problem, solver: str
+) -> None:
+    q = _motion(seated, MOVED_DEG)
+    elbow = seated.body.index["elbow_flexion_r"]
+    q[:, elbow] = np.radians(-20.0)
+    labels, mapping = _labels()
+    markers = Markers(
+        Path("x.c3d"), np.arange(FRAMES) / RATE_HZ, tuple(labels), _lab_markers(seated, q)
+    )
+    recording, fit = markers_to_recording(markers, seated.body, mapping, seated.posture, solver)
+    assert np.all(recording.q >= seated.body.lower) and np.all(recording.q <= seated.body.upper)
+    np.testing.assert_allclose(recording.q[:, elbow], seated.body.lower[elbow], atol=1e-6)
+    assert fit.residuals[:, list(mapping).index("wrist_r")].min() > 0.005
+    assert any(f.startswith("frames 1-4 (0-0.03 s): elbow_r ") for f in recording.flags)
+
+
+def test_a_short_marker_gap_is_filled_and_noted_a_long_one_flagged(
+    seated: cp.Problem, recorded: tuple, tmp_path: Path
+) -> None:
+    q, lab, mapping, _ = recorded
+    labels, _ = _labels()
+    gap = lab.copy()
+    gap[1, labels.index("WRIST_R")] = np.nan
+    path = _write_c3d(tmp_path / "gap.c3d", labels, gap)
+    markers = read_c3d(path)
+    assert np.isnan(markers.marker("WRIST_R")[1]).all() and np.isfinite(markers.positions[0]).all()
+    body = seated.body
+    recording, _ = markers_to_recording(markers, body, mapping, seated.posture, "nullspace")
+    assert recording.notes == (
+        "1 marker gap(s) of at most 0.25 s filled by linear interpolation; no frame skipped",
+    )
+    assert recording.flags == ()
+    assert np.abs(recording.q[[0, 2, 3]] - q[[0, 2, 3]]).max() < 1e-6
+    recording, _ = markers_to_recording(
+        markers, body, mapping, seated.posture, "nullspace", max_gap_s=0.01
+    )
+    assert recording.notes == ()
+    (flag,) = recording.flags
+    assert flag.startswith("marker WRIST_R: frames 2-2 (0.01-0.01 s) missing for longer than")
+    gap[:, labels.index("WRIST_R")] = np.nan
+    unseen = read_c3d(_write_c3d(tmp_path / "unseen.c3d", labels, gap))
+    message = _error(markers_to_recording, unseen, body, mapping, seated.posture, "nullspace")
+    expected = "a marker seen in at least one frame (missing from all 4)"
+    assert message == f"{unseen.source}: WRIST_R: expected {expected}"
+
+
+def test_the_rigid_fit_finds_a_known_rotation_and_translation() -> None:
+    points = np.array([[0.0, 0.0, 0.0], [0.3, 0.0, 0.1], [0.0, 0.2, 0.0], [0.1, 0.1, 0.4]])
+    r, t = rigid_fit(points, points @ R_LAB.T + T_LAB)
+    np.testing.assert_allclose(r, R_LAB, atol=1e-12)
+    np.testing.assert_allclose(t, T_LAB, atol=1e-12)
+    assert np.linalg.det(r) == pytest.approx(1.0)
+
+
+def test_a_mapping_that_does_not_fit_the_body_or_the_file_is_a_one_line_error(
+    recorded: tuple,
+) -> None:
+    _, _, mapping, path = recorded
+    wrong = {**mapping, "elbw_r": mapping["elbow_r"]}
+    message = _error(_read, path, _problem(wrong), "nullspace")
+    assert message.startswith(f"{SEATED}: motion.markers.elbw_r = 'elbw_r': expected")
+    assert "did you mean 'elbow_r'?" in message
+    absent = {**mapping, "elbow_r": ["EPIC_R_LAT", "EPIC_R_MEDIAL"]}
+    message = _error(_read, path, _problem(absent), "nullspace")
+    assert message.startswith(f"{SEATED}: motion.markers.elbow_r = 'EPIC_R_MEDIAL': expected")
+    assert f"a marker label of {path}" in message and "did you mean 'EPIC_R_MED'?" in message
+    no_root = {k: v for k, v in mapping.items() if k not in ("l5s1", "hip_r", "hip_l")}
+    message = _error(_read, path, _problem(no_root), "nullspace")
+    assert "at least 3 of the landmarks fixed to the body's root" in message
+    assert "mapped: mid_hip)" in message
+    message = _error(cp.load, SEATED, {"motion.markers": {"c7": ["C7"], "eyes": ["EYES"]}})
+    expected = "at least 3 landmarks, each mapped to a list of marker labels"
+    assert message == f"{SEATED}: motion.markers: expected {expected}"
+
+
+def test_a_file_that_is_not_c3d_or_has_unknown_units_is_a_one_line_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    text = tmp_path / "angles.c3d"
+    text.write_text("time_s,elbow_flexion\n0,10\n1,20\n" * 40)
+    assert "a C3D file (this one is not" in _error(read_c3d, text)
+    assert "a readable C3D file" in _error(read_c3d, tmp_path / "absent.c3d")
+    inches = _write_c3d(tmp_path / "inches.c3d", ["A"], np.ones((2, 1, 3)), units="in")
+    message = _error(read_c3d, inches)
+    assert message == f"{inches}: POINT:UNITS = 'in': expected one of ['mm', 'cm', 'm']"
+    empty = _write_c3d(tmp_path / "empty.c3d", [], np.ones((2, 0, 3)))
+    assert "with marker points (it has none)" in _error(read_c3d, empty)
+    monkeypatch.setitem(sys.modules, "ezc3d", None)
+    assert "pip install 'casadi_posture[motion]'" in _error(read_c3d, inches)
+
+
+def test_evaluate_drives_the_body_with_a_c3d_file(recorded: tuple, tmp_path: Path) -> None:
+    """The command line on the C3D file: the known angles in timeline.csv (to the file's
+    float32 storage), each landmark's residual per frame, the part held in its window only."""
+    q, _, mapping, path = recorded
+    problem = tmp_path / "seated.toml"
+    text = Path(SEATED).read_text()
+    table = "\n".join(f"{k} = {v!r}".replace("'", '"') for k, v in mapping.items())
+    problem.write_text(
+        f"{text}\n[motion]\nheld_s = {{ part = [[0.0, 0.015]] }}\n\n[motion.markers]\n{table}\n"
+    )
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        main, ["evaluate", str(problem), "--motion", str(path), "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "marker IK (c3d" in result.output
+    rows = list(csv.DictReader((out / "timeline.csv").open()))
+    names = cp.load(SEATED).body.dof_names
+    got = np.radians([[float(r[f"{n}_deg"]) for n in names] for r in rows])
+    np.testing.assert_allclose(got, q, atol=1e-6)
+    assert max(float(r["marker_residual_elbow_r_m"]) for r in rows) < 1e-4
+    assert [r["held_part"] for r in rows] == ["1", "1", "0", "0"]
