@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from casadi_posture.body.tree import BodyModel
-from casadi_posture.errors import ProblemError
+from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.motion.recording import Recording, check_times, fill_gaps
 from casadi_posture.spec.schema import MotionSpec
 
@@ -106,11 +106,13 @@ def read_angles(
     if missing and not spec.hold_missing:
         more = f" and {len(missing) - 6} more" if len(missing) > 6 else ""
         shown = ", ".join(missing[:6]) + more
+        unused = f"; columns not used: {', '.join(ignored[:5])}, map them in [motion.columns]"
         expected = (
             f"a column for every DOF of the body ({len(missing)} missing: {shown}); or "
             "motion.hold_missing = true in the problem file to hold them at its posture_deg"
+            + (unused if ignored else "")
         )
-        raise ProblemError(path, missing[0], None, expected)
+        raise ProblemError(path, missing[0], MISSING, expected)
     degrees = {dof: _numeric(table, column, path) for column, dof in dofs.items()}
     _check_not_radians(degrees, path)
     q = np.empty((time.size, len(body.dofs)))

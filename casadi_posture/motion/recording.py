@@ -123,8 +123,15 @@ def repeat(
             raise ProblemError(None, "--until", until_s, f"a time in s in (0, {MAX_DURATION_S:g}]")
         times = max(1, math.ceil((until_s + 1e-9) / period))
     assert times is not None
-    if times < 1 or times * recording.frames > MAX_STEPS:
-        expected = f"1 to {MAX_STEPS // recording.frames} repetitions of {recording.frames} frames"
+    most = MAX_STEPS // recording.frames
+    if times > most and until_s is not None:
+        expected = (
+            f"at most {most * period:g} s: {MAX_STEPS} frames ({most} cycles of "
+            f"{recording.frames}); resample to a longer step (--resample)"
+        )
+        raise ProblemError(None, "--until", until_s, expected)
+    if times < 1 or times > most:
+        expected = f"1 to {most} repetitions of {recording.frames} frames (--resample for more)"
         raise ProblemError(None, "--repeat", times, expected)
     offsets = period * np.arange(times)
     time = (recording.time[None, :] + offsets[:, None]).ravel()
