@@ -27,6 +27,7 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.frames import frame
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.motion.angles import read_angles
+from casadi_posture.motion.bvh import read_bvh
 from casadi_posture.motion.marker_ik import read_c3d_recording
 from casadi_posture.motion.recording import Recording, held_frames, repeat, resample
 from casadi_posture.output.animation import check_format, write_animation
@@ -212,11 +213,11 @@ def read_motion(
     until_s: float | None = None,
 ) -> Recording:
     """A recorded motion on the problem's body (docs/motion.md): a CSV or Parquet file of
-    joint angles [deg] with a time column [s], or a C3D file of markers turned into joint
-    angles by the IK ``solver`` (default: the file's) with the problem's
-    ``[motion.markers]``; each load held in its ``motion.held_s`` windows; resampled every
-    ``resample_s`` [s] if given, then played ``repeat_times`` times or until ``until_s`` [s]
-    as a work cycle."""
+    joint angles [deg] with a time column [s]; a C3D file of markers or a BVH file of joint
+    rotations, turned into joint angles by the IK ``solver`` (default: the file's) with the
+    problem's ``[motion.markers]`` or ``[motion.bvh]``; each load held in its
+    ``motion.held_s`` windows; resampled every ``resample_s`` [s] if given, then played
+    ``repeat_times`` times or until ``until_s`` [s] as a work cycle."""
     path, spec = Path(motion), problem.spec.motion
     if path.suffix.lower() == ".c3d":
         check_solver(solver, problem.path)
@@ -224,6 +225,17 @@ def read_motion(
             path,
             problem.body,
             spec,
+            problem.posture,
+            solver or problem.spec.solver.name,
+            problem=problem.path,
+            solver_spec=problem.spec.solver if solver is None else None,
+        )
+    elif path.suffix.lower() == ".bvh":
+        check_solver(solver, problem.path)
+        recording = read_bvh(
+            path,
+            problem.body,
+            spec.bvh,
             problem.posture,
             solver or problem.spec.solver.name,
             problem=problem.path,

@@ -330,7 +330,7 @@ def test_evaluate_drives_the_body_with_a_c3d_file(recorded: tuple, tmp_path: Pat
         main, ["evaluate", str(problem), "--motion", str(path), "--out", str(out)]
     )
     assert result.exit_code == 0, result.output
-    assert "marker IK (c3d" in result.output
+    assert "IK fit of the c3d file" in result.output
     rows = list(csv.DictReader((out / "timeline.csv").open()))
     names = cp.load(SEATED).body.dof_names
     got = np.radians([[float(r[f"{n}_deg"]) for n in names] for r in rows])

@@ -40,7 +40,8 @@ from casadi_posture.static import law
     "column in s (time_s or time), one column per DOF named as `describe` names it "
     "(or shoulder_flexion_r_deg, as timeline.csv has it; other names mapped by the "
     "problem's [motion.columns]); or a .c3d file of markers, mapped to the body's "
-    "landmarks by the problem's [motion.markers] and turned into joint angles by the IK.",
+    "landmarks by the problem's [motion.markers], or a .bvh file of joint rotations mapped "
+    "to its segments by [motion.bvh], turned into joint angles by the IK.",
 )
 @SOLVER_OPTION
 @click.option(
@@ -153,14 +154,15 @@ def _report(run: api.Simulation, files: list[Path], recovery_law: str, show_all:
     )
     for note in recorded["notes"]:
         click.echo(f"  {note}")
-    fit = recorded["marker_residuals"]
+    fit = recorded["fit_residuals"]
     if fit:
-        worst = max(fit, key=lambda k: fit[k]["max_m"])
-        median = max(v["median_m"] for v in fit.values())
+        unit, scale, shown = ("deg", 1.0, "°") if recorded["kind"] == "bvh" else ("m", 1e3, " mm")
+        worst = max(fit, key=lambda k: fit[k][f"max_{unit}"])
+        median = max(v[f"median_{unit}"] for v in fit.values())
         click.echo(
-            f"  marker IK ({result.recording.kind}, {len(fit)} landmarks): median residual at "
-            f"most {median * 1e3:.1f} mm (a landmark's), largest {fit[worst]['max_m'] * 1e3:.1f} "
-            f"mm ({worst} at {fit[worst]['max_time_s']:g} s); per frame in timeline.csv"
+            f"  IK fit of the {recorded['kind']} file ({len(fit)} targets): median residual at "
+            f"most {median * scale:.1f}{shown}, largest {fit[worst][f'max_{unit}'] * scale:.1f}"
+            f"{shown} ({worst} at {fit[worst]['max_time_s']:g} s); per frame in timeline.csv"
         )
     click.echo(f"recovery law: {recovery_law}")
     click.echo(f"endurance rule: {report['endurance_rule']}\n")

@@ -139,6 +139,26 @@ class Orientation(Task):
 
 
 @dataclass(frozen=True)
+class Frame(Task):
+    """Frame of a segment at a target orientation, axis by axis: e = vec(R − Rt), 9 rows, of
+    norm 2√2·sin(angle/2) [rad-like]; zero only at R = Rt, where ``Orientation``'s error also
+    vanishes at a half turn, a stationary point a solver can stop at (recorded motion)."""
+
+    segment: str
+    dof: str | None
+    rotation: tuple[float, ...]
+
+    step_limit = ANGULAR_STEP
+    unit = "rad"
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.rotation, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        return ca.reshape(body.rotation(self.dof) - ca.reshape(p, 3, 3), 9, 1)
+
+
+@dataclass(frozen=True)
 class CentreOfMass(Task):
     """Centre of mass of the body and the ``carried`` point masses (landmark, kg) over a
     target in the listed world axes [m] (balance). Its parameters are the target's

@@ -187,17 +187,19 @@ def _add_recorded_loads(groups: list[dict[str, Any]], time: np.ndarray, load: np
 
 def recording_summary(result: SimulationResult) -> dict[str, Any]:
     """Where a replay's postures came from: the file, its kind, its frames and times [s], what
-    reading did to them, the flags of the recording itself and, for markers, each
-    landmark's distance from its markers after the fit (median, largest and when) [m]."""
+    reading did to them, the flags of the recording itself and the IK's fit: for markers each
+    landmark's distance from its markers [m], for BVH each joint's segment's angle from its
+    orientation [deg] (median, largest and when)."""
     recording = result.recording
     assert recording is not None
+    scale, unit = (180 / np.pi, "deg") if recording.kind == "bvh" else (1.0, "m")
     fit = {
-        landmark: {
-            "median_m": float(np.median(residual)),
-            "max_m": float(residual.max()),
+        name: {
+            f"median_{unit}": float(np.median(residual)) * scale,
+            f"max_{unit}": float(residual.max()) * scale,
             "max_time_s": float(recording.time[int(np.argmax(residual))]),
         }
-        for landmark, residual in (recording.residuals or {}).items()
+        for name, residual in (recording.residuals or {}).items()
     }
     return {
         "source": str(recording.source),
@@ -207,7 +209,7 @@ def recording_summary(result: SimulationResult) -> dict[str, Any]:
         "last_time_s": float(recording.time[-1]),
         "notes": list(recording.notes),
         "flags": list(recording.flags),
-        "marker_residuals": fit or None,
+        "fit_residuals": fit or None,
     }
 
 
@@ -500,9 +502,13 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     if tl.held is not None:
         for j, load in enumerate(result.problem.loads):
             columns[f"held_{load.name}"] = [int(v) for v in tl.held[:, j]]
-    fitted = result.recording.residuals if result.recording is not None else None
-    for landmark, residual in (fitted or {}).items():
-        columns[f"marker_residual_{landmark}_m"] = residual[: tl.time.size].tolist()
+    recording = result.recording
+    for name, residual in ((recording and recording.residuals) or {}).items():
+        values = residual[: tl.time.size]
+        if recording.kind == "bvh":
+            columns[f"bvh_residual_{name}_deg"] = np.degrees(values).tolist()
+        else:
+            columns[f"marker_residual_{name}_m"] = values.tolist()
     if tl.balance is not None:
         ground, margins = tl.balance
         columns["com_x_m"] = ground[:, 0].tolist()

@@ -533,6 +533,19 @@ class ErgonomicsSpec(Strict):
         return self.model_dump(exclude_none=True)
 
 
+class BvhSpec(Strict):
+    """How a BVH skeleton maps onto the body (docs/motion.md): ``joints`` maps a BVH joint to
+    the body's segment it moves; ``up`` and ``forward`` are the file's axes; ``rest_deg`` the
+    body's DOF angles [deg] in the skeleton's rest pose (every channel 0); a segment farther
+    than ``max_angle_residual_deg`` [deg] from its joint's orientation is flagged."""
+
+    joints: dict[str, str] = {}
+    up: Literal["x", "-x", "y", "-y", "z", "-z"] = "y"
+    forward: Literal["x", "-x", "y", "-y", "z", "-z"] = "z"
+    rest_deg: dict[str, Angle] = {}
+    max_angle_residual_deg: Annotated[float, _between(0.1, 90.0)] = 5.0
+
+
 class MotionSpec(Strict):
     """How a recorded motion maps onto the body (``casadi-posture evaluate``;
     docs/motion.md): ``columns`` maps a joint-angle file's column names to DOFs (a column
@@ -551,6 +564,7 @@ class MotionSpec(Strict):
     markers: dict[str, Annotated[list[str], Field(min_length=1)]] = {}
     max_marker_residual_m: Annotated[float, _between(0.001, 1.0)] = 0.02
     held_s: dict[str, list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = {}
+    bvh: BvhSpec = BvhSpec()
 
     @field_validator("held_s")
     @classmethod

@@ -1,0 +1,232 @@
+"""BVH recordings: joint rotations of an animation skeleton turned into the body's joint angles
+by the package's own prioritized IK, on orientation tasks (docs/motion.md).
+
+A BVH joint's local rotation is the product of its channels' rotations in the order the
+file lists them (``Zrotation Xrotation Yrotation``: Rz·Rx·Ry); bvhio composes them. Per
+frame, each joint's orientation relative to the skeleton's root, in our axes (x forward,
+y left, z up, from the file's ``up`` and ``forward``), times the rest orientation of the
+segment it is mapped to (the body at ``rest_deg``: the posture the skeleton has with every
+channel at 0, a T-pose's arms abducted 90°), is that segment's target. One priority level
+holds every target, frame axis by frame axis (least squares), the lowest the problem's
+posture for what they leave free; the joint limits hold. A segment's residual is the angle
+of its error rotation.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.errors import MISSING, ProblemError
+from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.result import IKResult
+from casadi_posture.ik.solvers import Solver, cached_solver
+from casadi_posture.ik.tasks import Frame, JointReference
+from casadi_posture.motion.angles import closest
+from casadi_posture.motion.recording import Recording
+from casadi_posture.spec.schema import BvhSpec, SolverSpec
+
+#: Unit vectors of the axis names a file's ``up`` and ``forward`` may take.
+AXES = {
+    "x": (1.0, 0.0, 0.0),
+    "-x": (-1.0, 0.0, 0.0),
+    "y": (0.0, 1.0, 0.0),
+    "-y": (0.0, -1.0, 0.0),
+    "z": (0.0, 0.0, 1.0),
+    "-z": (0.0, 0.0, -1.0),
+}
+
+
+def read_bvh(
+    path: str | Path,
+    body: BodyModel,
+    spec: BvhSpec,
+    posture: np.ndarray,
+    solver_name: str,
+    *,
+    problem: Path,
+    solver_spec: SolverSpec | None = None,
+) -> Recording:
+    """The BVH file ``path`` as joint angles [rad] of ``body``, by the problem file
+    ``problem``'s ``[motion.bvh]`` (``spec``), ``posture`` [rad] settling what the joints
+    leave free, and the IK solver ``solver_name``; each mapped segment's residual [rad]."""
+    path = Path(path)
+    skeleton = _read(path)
+    joints = _joints(skeleton.Root)
+    moving = _mapping(spec, joints, body, path, problem)
+    axes = _axes(spec, problem)
+    world = _world(skeleton.Root, {n: _rotations(j) for n, j in joints.items()})
+    root = world[skeleton.Root.Name]
+    start, rest = _rest(body, spec, [d for _, d in moving.values()])
+    tasks = [Frame(f"bvh_{n}", 1, s, d, tuple(np.eye(3).ravel())) for n, (s, d) in moving.items()]
+    posture_task = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
+    hierarchy = TaskHierarchy(body, [*tasks, posture_task])
+    solver = cached_solver(solver_name, hierarchy, solver_spec)
+    frames = int(skeleton.FrameCount)
+    q, residuals = np.empty((frames, body.n)), np.empty((frames, len(moving)))
+    q_prev, failed = start, []
+    for k in range(frames):
+        # segment target = the joint's orientation relative to the root, in our axes, times
+        # the segment's orientation at the skeleton's rest pose
+        targets = [
+            axes @ root[k].T @ world[n][k] @ axes.T @ rest[d] for n, (_, d) in moving.items()
+        ]
+        hierarchy.targets[: 9 * len(targets)] = np.concatenate([r.ravel("F") for r in targets])
+        result = solver.solve(q_prev) if k else _first(solver, (start, posture), posture)
+        q[k] = q_prev = result.q
+        failed += [] if result.success else [str(k + 1)]
+        residuals[k] = _angles(hierarchy, result.q, len(moving))
+    time = np.arange(frames) * float(skeleton.FrameTime)
+    by_joint = {n: residuals[:, j] for j, n in enumerate(moving)}
+    flags = _flags(by_joint, time, spec.max_angle_residual_deg)
+    if failed:
+        flags.append(f"the {solver_name} IK did not converge in frame(s) {', '.join(failed[:5])}")
+    note = f"BVH: {len(moving)} joints mapped, {frames} frames of {float(skeleton.FrameTime):g} s"
+    return Recording(path, "bvh", time, q, (note,), tuple(flags), residuals=by_joint)
+
+
+def _first(solver: Solver, starts: tuple[np.ndarray, ...], posture: np.ndarray) -> IKResult:
+    """The first frame's IK answer from each of ``starts`` (the rest pose, which every
+    channel measures from, and the problem's posture): a joint of three DOFs can take one
+    orientation in two ways (a shoulder's flexion, abduction and rotation), and at a gimbal
+    lock (a T-pose's shoulders) in many. Kept: the one that fits the joints best, then the one
+    nearest ``posture`` [rad]; later frames follow from it."""
+    answers = [solver.solve(np.asarray(s, dtype=float)) for s in starts]
+    best = min(a.residuals[0] for a in answers)
+    close = [a for a in answers if a.residuals[0] <= best + 1e-9]
+    return min(close, key=lambda a: float(np.linalg.norm(a.q - posture)))
+
+
+def _angles(hierarchy: TaskHierarchy, q: np.ndarray, count: int) -> np.ndarray:
+    """The angle [rad] by which each of the first ``count`` segments' frames misses its
+    target at ``q``: 2·asin(‖vec(R − Rt)‖ / 2√2)."""
+    chords = np.asarray(hierarchy.function(q, hierarchy.targets)[0]).reshape(count, 9)
+    return 2 * np.arcsin(np.clip(np.linalg.norm(chords, axis=1) / (2 * math.sqrt(2)), 0.0, 1.0))
+
+
+def _mapping(
+    spec: BvhSpec, joints: dict, body: BodyModel, path: Path, problem: Path
+) -> dict[str, tuple[str, str]]:
+    """The mapped BVH joints whose segment a DOF moves, each with its segment and that DOF
+    (the last before the segment); a joint not in the
+    file, a segment or a rest DOF not on the body is a one-line error naming its key."""
+    if not spec.joints:
+        expected = "a [motion.bvh.joints] table mapping BVH joints to the body's segments"
+        raise ProblemError(problem, "motion.bvh.joints", MISSING, expected)
+    segments = {s.name: s for s in body.segments}
+    for name, segment in spec.joints.items():
+        key = f"motion.bvh.joints.{name}"
+        if name not in joints:
+            expected = f"a joint of {path} ({closest(name, list(joints))})"
+            raise ProblemError(problem, key, segment, expected)
+        if segment not in segments:
+            expected = f"a segment of the body: {closest(segment, list(segments))}"
+            raise ProblemError(problem, key, segment, expected)
+    for dof in spec.rest_deg:
+        if dof not in body.index:
+            expected = f"a DOF of the body: {closest(dof, body.dof_names)}"
+            raise ProblemError(problem, f"motion.bvh.rest_deg.{dof}", dof, expected)
+    moving = {
+        n: (s, segments[s].dof) for n, s in spec.joints.items() if segments[s].dof is not None
+    }
+    if not moving:
+        expected = "a BVH joint mapped to a segment the body's DOFs move"
+        raise ProblemError(problem, "motion.bvh.joints", MISSING, expected)
+    return moving
+
+
+def _read(path: Path):
+    """The file's skeleton and motion (bvhio); one-line errors for a missing or bad file."""
+    try:
+        import bvhio
+    except ImportError:
+        expected = "bvhio to read BVH files: pip install 'casadi_posture[motion]'"
+        raise ProblemError(path, None, None, expected) from None
+    if not path.is_file():
+        raise ProblemError(path, None, None, "a BVH file that exists")
+    if not path.read_bytes()[:64].lstrip().upper().startswith(b"HIERARCHY"):
+        raise ProblemError(path, None, None, "a BVH file (it starts with HIERARCHY)")
+    try:
+        skeleton = bvhio.readAsBvh(str(path))
+    except Exception as error:  # the parser raises several kinds on a malformed file
+        raise ProblemError(path, None, None, f"a readable BVH file ({error})") from None
+    if int(skeleton.FrameCount) < 2 or float(skeleton.FrameTime) <= 0:
+        expected = "at least two frames and a frame time above 0 s"
+        raise ProblemError(path, "MOTION", int(skeleton.FrameCount), expected)
+    return skeleton
+
+
+def _joints(root) -> dict:
+    """Every joint of the skeleton by name, parents first."""
+    out, stack = {}, [root]
+    while stack:
+        joint = stack.pop(0)
+        out[joint.Name] = joint
+        stack.extend(joint.Children)
+    return out
+
+
+def _rotations(joint) -> np.ndarray:
+    """A joint's local rotation per frame (frames, 3, 3), its channels composed in the
+    file's order."""
+    from pyglm import glm
+
+    return np.array([np.array(glm.mat3_cast(k.Rotation), dtype=float) for k in joint.Keyframes])
+
+
+def _world(root: Any, local: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Each joint's orientation in the file's world per frame: its parents' local rotations
+    and its own, composed from the root down."""
+    out = {root.Name: local[root.Name]}
+    stack = [root]
+    while stack:
+        joint = stack.pop(0)
+        for child in joint.Children:
+            out[child.Name] = out[joint.Name] @ local[child.Name]
+            stack.append(child)
+    return out
+
+
+def _axes(spec: BvhSpec, problem: Path) -> np.ndarray:
+    """The rotation from the file's axes into ours (x forward, y left, z up): its rows are
+    the file's ``forward``, ``up`` × ``forward`` and ``up``."""
+    up, forward = np.array(AXES[spec.up]), np.array(AXES[spec.forward])
+    if abs(up @ forward) > 0.5:
+        expected = "a forward axis across the up axis"
+        raise ProblemError(problem, "motion.bvh.forward", spec.forward, expected)
+    return np.array([forward, np.cross(up, forward), up])
+
+
+def _rest(body: BodyModel, spec: BvhSpec, dofs: list[str]) -> tuple[np.ndarray, dict]:
+    """The body at the skeleton's rest pose (``rest_deg``, every other DOF at 0) [rad], and
+    the world orientation of each of ``dofs``' frames there."""
+    q = np.zeros(body.n)
+    for dof, angle in spec.rest_deg.items():
+        q[body.index[dof]] = math.radians(angle)
+    frames = {
+        d: np.array(ca.evalf(ca.substitute(body.rotation(d), body.q, ca.DM(q)))) for d in dofs
+    }
+    return q, frames
+
+
+def _flags(residuals: dict[str, np.ndarray], time: np.ndarray, limit_deg: float) -> list[str]:
+    """A flag per BVH joint whose segment misses the joint's orientation by more than
+    ``limit_deg`` [deg] in some frame (``residuals`` [rad]): its worst frame, and how many."""
+    out = []
+    for joint, radians in residuals.items():
+        values = np.degrees(radians)
+        over = values > limit_deg
+        if over.any():
+            k = int(np.argmax(values))
+            out.append(
+                f"{joint}: its segment is {values[k]:.1f}° from the joint's orientation at "
+                f"{time[k]:g} s "
+                f"(frame {k + 1}), above motion.bvh.max_angle_residual_deg = {limit_deg:g}° in "
+                f"{int(over.sum())} frame(s): the body cannot take that rotation there"
+            )
+    return out
