@@ -260,3 +260,19 @@ def test_the_low_back_and_scores_follow_the_held_loads() -> None:
     np.testing.assert_allclose(frame["compression_N"][:2], expected, rtol=1e-12)
     rula = [with_part.scores[0].rula.grand, without.scores[0].rula.grand]
     assert list(frame["rula_r"][:2]) == rula
+
+
+def test_a_problem_without_tasks_evaluates_and_draws(tmp_path: Path) -> None:
+    """A recording needs no task: the files and every figure are written, the effector
+    figure showing the joint angles that move most, and no level residual is claimed."""
+    import tomllib
+
+    data = tomllib.loads(Path(ARM).read_text())
+    del data["tasks"]
+    problem = cp.from_dict(data, "no_tasks.toml")
+    path = _arm_csv(tmp_path / "m.csv", [10.0, 40.0, 70.0], [5.0, 25.0, 45.0])
+    run = cp.evaluate(problem, path)
+    written = run.write(tmp_path / "out")
+    assert (tmp_path / "out" / "effector.png") in written
+    task = run.summary()["task"]
+    assert task["level1"] is None and task["held_s"] == 2.0

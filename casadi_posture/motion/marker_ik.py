@@ -24,9 +24,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 
-from casadi_posture.body.tree import BodyModel
+from casadi_posture.body.tree import BodyModel, Landmark
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.solvers import cached_solver
@@ -81,6 +82,7 @@ def read_c3d_recording(
         max_gap_s=spec.max_gap_s,
         max_residual_m=spec.max_marker_residual_m,
         solver_spec=solver_spec,
+        calibration_s=None if spec.calibrate_s is None else tuple(spec.calibrate_s),
     )
 
 
@@ -95,15 +97,27 @@ def markers_to_recording(
     max_gap_s: float = 0.25,
     max_residual_m: float = 0.02,
     solver_spec: SolverSpec | None = None,
+    calibration_s: tuple[float, float] | None = None,
 ) -> tuple[Recording, MarkerFit]:
     """The joint angles [rad] per frame that fit ``body``'s landmarks to the means of their
     markers (``mapping``: landmark → labels; ``problem`` names the file it came from),
     ``posture`` [rad] settling what they leave free, by the IK solver ``solver_name``.
     Marker gaps up to ``max_gap_s`` [s] are filled linearly and noted, longer ones filled and
-    flagged; so are frames whose largest residual exceeds ``max_residual_m`` [m]."""
-    roots = _check_mapping(markers, body, mapping, problem)
-    names = tuple(mapping)
-    lab, notes, flags = _targets(markers, mapping, max_gap_s)
+    flagged; so are frames whose largest residual exceeds ``max_residual_m`` [m]. With
+    ``calibration_s`` ([start, end] [s]: frames where the subject stands in ``posture``),
+    each landmark first moves, on its segment, to where its markers are then
+    (``calibrated``)."""
+    points = _points(markers, body, mapping, problem, calibration_s is not None)
+    names = tuple(points)
+    lab, notes, flags = _targets(markers, points, max_gap_s)
+    if calibration_s is not None:
+        body, moved = calibrated(body, lab, markers.time, points, posture, calibration_s, problem)
+        notes.append(
+            f"calibrated on {calibration_s[0]:g}-{calibration_s[1]:g} s, the subject taken in "
+            f"posture_deg there: markers placed on their segments, landmarks moved onto "
+            f"their markers by up to {moved * 1e3:.0f} mm"
+        )
+    roots = _roots(body, names, problem)
     moving = [n for n in names if n not in roots]
     tasks = [Position(f"marker_{n}", 1, n, (0.0, 0.0, 0.0)) for n in moving]
     posture_task = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
@@ -144,6 +158,58 @@ def markers_to_recording(
     return recording, MarkerFit(names, residuals, rotation, translation)
 
 
+def calibrated(
+    body: BodyModel,
+    lab: np.ndarray,
+    time: np.ndarray,
+    points: Mapping[str, Sequence[str]],
+    posture: np.ndarray,
+    window_s: tuple[float, float],
+    problem: Path | None,
+) -> tuple[BodyModel, float]:
+    """``body`` with each fitted point (``points``: a landmark, or ``<segment>.<label>``)
+    placed, on the segment that carries it, at the mean of its markers over the frames of
+    ``window_s`` [s], where the subject is taken to stand in ``posture`` [rad]: there the lab
+    is fitted onto the body (Kabsch, on the mapped landmarks: the posture is known, nothing
+    trades against it), and each point carried back to the zero posture through its
+    segment's rotation; also the largest move of a landmark [m]. The markers' places on the
+    segments are then the subject's own; a posture there other than ``posture`` becomes an
+    offset of every later angle, and so do the landmarks' offsets from their markers through
+    the calibration's own fit (1.3° with 1 cm offsets in tests/test_marker_ik.py)."""
+    inside = (time >= window_s[0] - 1e-9) & (time <= window_s[1] + 1e-9)
+    if not inside.any():
+        expected = f"a window of the recording's time, {time[0]:g} to {time[-1]:g} s"
+        raise ProblemError(problem, "motion.calibrate_s", list(window_s), expected)
+    names = list(points)
+    markers = lab[inside].mean(axis=0)
+    known = [n for n in names if n in body.landmarks]
+    where = ca.Function("where", [body.q], [ca.horzcat(*[body.landmark(n) for n in known])])
+    model = np.asarray(where(posture)).T
+    if len(known) < 3 or np.linalg.svd(model - model.mean(axis=0), compute_uv=False)[1] < 0.01:
+        expected = "at least 3 landmarks, not on one line, to place the markers by"
+        raise ProblemError(problem, "motion.calibrate_s", list(window_s), expected)
+    rotation, translation = rigid_fit(markers[[names.index(n) for n in known]], model)
+    placed = markers @ rotation.T + translation
+    segments = {s.name: s.dof for s in body.segments}
+    out = {n: lm for n, lm in body.landmarks.items() if n not in points}
+    for name, x in zip(names, placed, strict=True):
+        dof = body.landmarks[name].dof if name in body.landmarks else segments[name.split(".")[0]]
+        turn = ca.Function("turn", [body.q], [body.rotation(dof), body.point(dof, (0, 0, 0))])
+        r, c = (np.asarray(v, dtype=float) for v in turn(posture))
+        position = tuple(r.T @ (x - c.ravel()))
+        out[name] = Landmark(name, dof, position)
+    moved = np.linalg.norm(placed[[names.index(n) for n in known]] - model, axis=1).max()
+    body = BodyModel(
+        body.name,
+        body.dofs,
+        body.segments,
+        list(out.values()),
+        gravity=body.gravity,
+        feet=body.feet,
+    )
+    return body, float(moved)
+
+
 def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The rotation R and translation t [m] minimising Σ‖R sᵢ + t − tᵢ‖² over the points
     ``source`` onto ``target`` (k×3 each, k ≥ 3 not on one line): Kabsch's SVD solution,
@@ -155,16 +221,27 @@ def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.nd
     return r, t_mean - r @ s_mean
 
 
-def _check_mapping(
-    markers: Markers, body: BodyModel, mapping: Mapping[str, Sequence[str]], problem: Path | None
-) -> list[str]:
-    """The mapped landmarks fixed to the root; a landmark not on the body, a label not in
-    the file (or in it twice), or too few root landmarks to fit the transform on, is a
-    one-line error."""
+def _points(
+    markers: Markers,
+    body: BodyModel,
+    mapping: Mapping[str, Sequence[str]],
+    problem: Path | None,
+    calibrating: bool,
+) -> dict[str, list[str]]:
+    """The points the IK fits, each with the markers whose mean it is: a landmark of the
+    body with its markers; a segment's markers each a point of its own on that segment
+    (``<segment>.<label>``, placed by the calibration). A key that is neither, a segment
+    without a calibration, a label not in the file (or in it twice) is a one-line error."""
+    segments = {s.name for s in body.segments}
+    points: dict[str, list[str]] = {}
     for name, labels in mapping.items():
         key = f"motion.markers.{name}"
-        if name not in body.landmarks:
-            expected = f"a landmark of the body: {closest(name, list(body.landmarks))}"
+        if name not in body.landmarks and name not in segments:
+            choices = [*body.landmarks, *segments]
+            expected = f"a landmark or a segment of the body: {closest(name, choices)}"
+            raise ProblemError(problem, key, name, expected)
+        if name not in body.landmarks and not calibrating:
+            expected = "a landmark: a segment's markers are placed by motion.calibrate_s"
             raise ProblemError(problem, key, name, expected)
         for label in labels:
             count = markers.labels.count(label)
@@ -175,18 +252,29 @@ def _check_mapping(
             if count > 1:
                 expected = f"a label found once in {markers.source} (it is there {count} times)"
                 raise ProblemError(problem, key, label, expected)
+        if name in body.landmarks:
+            points[name] = list(labels)
+        else:
+            points.update({f"{name}.{label}": [label] for label in labels})
+    return points
+
+
+def _roots(body: BodyModel, names: Sequence[str], problem: Path | None) -> list[str]:
+    """The fitted points fixed to the body's root; fewer than 3, or on one line, or all of
+    them, is a one-line error."""
     fixed = [n for n, lm in body.landmarks.items() if lm.dof is None]
-    roots = [n for n in mapping if n in fixed]
+    roots = [n for n in names if n in fixed]
     points = np.array([body.landmarks[n].position for n in roots], dtype=float).reshape(-1, 3)
     spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False) if roots else [0.0]
     if len(roots) < 3 or spread[1] / np.sqrt(len(roots)) < ROOT_SPREAD_M:
+        shown = ", ".join(n for n in fixed if "." not in n)
         expected = (
-            f"at least 3 of the landmarks fixed to the body's root, not on one line "
-            f"({', '.join(fixed)}; mapped: {', '.join(roots) or 'none'}): the transform from "
-            "the lab into the body's frame is fitted on them"
+            f"at least 3 points fixed to the body's root, not on one line ({shown}, or the "
+            f"root segment's markers; mapped: {', '.join(roots) or 'none'}): the transform "
+            "from the lab into the body's frame is fitted on them"
         )
         raise ProblemError(problem, "motion.markers", MISSING, expected)
-    if len(roots) == len(mapping):
+    if len(roots) == len(names):
         expected = "a landmark moved by the body's DOFs too (all mapped ones are on its root)"
         raise ProblemError(problem, "motion.markers", MISSING, expected)
     return roots

@@ -305,13 +305,14 @@ def _level(result: SimulationResult, task: object) -> int:
 
 def plot_effector(result: SimulationResult, path: Path) -> Path:
     """The task followed over time (paper Figs 12–14): the effector's position along the
-    first line task; else the top task's distance to its target point or plane; else the
-    joint angles that move most; the fatigue/recovery cycles marked. A distance axis spans
-    at least 1 mm, so that rounding noise does not look like motion."""
+    first line task; else the top task's distance to its target point or plane; else (no
+    such task, or none: a recording) the joint angles that move most; the fatigue/recovery
+    cycles marked. A distance axis spans at least 1 mm, so that rounding noise does not look
+    like motion."""
     tl = result.timeline
     ordered = sorted(result.tasks, key=lambda t: t.priority)
     line = next((t for t in ordered if isinstance(t, Line)), None)
-    top = next((t for t in ordered if isinstance(t, Position | Plane)), ordered[0])
+    top = next((t for t in ordered if isinstance(t, Position | Plane)), None)
     fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
     minutes = tl.time / 60
     if line is not None and tl.along_line is not None:

@@ -554,7 +554,9 @@ class MotionSpec(Strict):
     ``hold_missing`` holds a DOF the file does not give at the problem's posture_deg.
     ``markers`` maps a landmark of the body to the C3D marker labels whose mean it is (at
     least 3 landmarks); a frame whose landmark lies farther than ``max_marker_residual_m``
-    [m] from its markers after the fit is flagged. ``held_s`` gives, per load name, the
+    [m] from its markers after the fit is flagged; ``calibrate_s`` ([start, end] [s]) the
+    frames in which the subject stands in posture_deg, where each landmark is placed on its
+    segment at its markers. ``held_s`` gives, per load name, the
     [start, end] windows [s] of the recording's time during which it is held (a load not
     named is held throughout)."""
 
@@ -563,8 +565,16 @@ class MotionSpec(Strict):
     hold_missing: bool = False
     markers: dict[str, Annotated[list[str], Field(min_length=1)]] = {}
     max_marker_residual_m: Annotated[float, _between(0.001, 1.0)] = 0.02
+    calibrate_s: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
     held_s: dict[str, list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = {}
     bvh: BvhSpec = BvhSpec()
+
+    @field_validator("calibrate_s")
+    @classmethod
+    def _calibration(cls, value: list[float] | None) -> list[float] | None:
+        if value is not None and not value[0] <= value[1]:
+            raise ValueError("a window [start, end] with start <= end [s]")
+        return value
 
     @field_validator("held_s")
     @classmethod
