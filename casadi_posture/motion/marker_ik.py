@@ -137,6 +137,11 @@ def markers_to_recording(
         targets = lab[k] @ rotation[k].T + translation[k]
         hierarchy.targets[: 3 * len(moving)] = targets[rows].ravel()
         result = solver.solve(q_prev)
+        if result.residuals[0] > max_residual_m:
+            # a local minimum the last frame led into (a shoulder past a gimbal lock): tried
+            # again from the problem's posture, the better kept
+            again = solver.solve(np.asarray(posture, dtype=float))
+            result = again if again.residuals[0] < result.residuals[0] else result
         q[k] = q_prev = result.q
         if not result.success:
             failed.append(f"{k + 1} ({result.status})")
