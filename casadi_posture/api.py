@@ -14,6 +14,7 @@ degrees, N·m, %MVC, s.
 
 from __future__ import annotations
 
+import hashlib
 import shutil
 import tomllib
 from collections.abc import Mapping, Sequence
@@ -245,7 +246,14 @@ def read_motion(
         recording = read_angles(path, problem.body, spec, problem.posture, problem.path)
     names = [load.name for load in problem.loads]
     held = held_frames(recording.time, spec.held_s, names, problem.path)
-    recording = replace(recording, held=held)
+    options = {
+        "solver": solver,
+        "resample_s": resample_s,
+        "repeat_times": repeat_times,
+        "until_s": until_s,
+    }
+    sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
+    recording = replace(recording, held=held, read_with={"sha256": sha256, **options})
     if resample_s is not None:
         recording = resample(recording, resample_s)
     if repeat_times is not None or until_s is not None:

@@ -276,3 +276,20 @@ def test_a_problem_without_tasks_evaluates_and_draws(tmp_path: Path) -> None:
     assert (tmp_path / "out" / "effector.png") in written
     task = run.summary()["task"]
     assert task["level1"] is None and task["held_s"] == 2.0
+
+
+def test_rerun_repeats_an_evaluation_and_refuses_a_changed_recording(tmp_path: Path) -> None:
+    """rerun on evaluate's manifest reads the same recording the same way (--repeat here)
+    and gives summary.json byte for byte; a recording changed since is a one-line error."""
+    path = _arm_csv(tmp_path / "m.csv", [90.0] * 10, [0.0] * 10)
+    out = tmp_path / "out"
+    command = ["evaluate", ARM, "--motion", str(path), "--repeat", "2", "--out", str(out)]
+    assert CliRunner().invoke(main, command).exit_code == 0
+    again = CliRunner().invoke(main, ["rerun", str(out / "manifest.json")])
+    assert again.exit_code == 0, again.output
+    assert "summary.json identical to" in again.output and "20 frames" in again.output
+    _arm_csv(path, [80.0] * 10, [0.0] * 10)
+    changed = CliRunner().invoke(
+        main, ["rerun", str(out / "manifest.json"), "--out", str(tmp_path / "r2")]
+    )
+    assert changed.exit_code == 2 and "the recording as it was" in changed.output

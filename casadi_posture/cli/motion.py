@@ -16,9 +16,8 @@ from casadi_posture.cli.common import (
     main,
     no_report_option,
     problem_from,
-    shown_groups,
 )
-from casadi_posture.cli.runs import echo_outcome, write_run
+from casadi_posture.cli.runs import report_recording, write_run
 from casadi_posture.errors import ProblemError
 from casadi_posture.output.report import table
 from casadi_posture.runs.prediction import (
@@ -131,7 +130,7 @@ def evaluate(
         api.check_out(out, force=force)
         run = api.evaluate(resolved, recording)
         files = write_run(run, out, command_line(), report=not no_report)
-        code = _report(run, files, law(resolved), show_all)
+        code = report_recording(run, files, law(resolved), show_all)
         if compare and run.stop != "interrupted":
             comparison = compare_prediction(resolved, run.result)
             predicted = api.Simulation(comparison.predicted)
@@ -140,67 +139,6 @@ def evaluate(
             _echo_prediction(comparison, extra)
             code = code or (1 if comparison.predicted_summary["flags"] else 0)
     raise SystemExit(code)
-
-
-def _report(run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool) -> int:
-    """Print what evaluate shows: the recording, the groups' loads over it (on a large body
-    the most loaded, unless ``show_all``), the outcome; its exit code."""
-    result, report = run.result, run.summary()
-    recorded = report["recording"]
-    click.echo(
-        f"{result.problem.path} driven by {recorded['source']}: {recorded['frames']} frames, "
-        f"{recorded['first_time_s']:g} to {recorded['last_time_s']:g} s; "
-        f"{result.wall_time_s:.2f} s wall"
-    )
-    for note in recorded["notes"]:
-        click.echo(f"  {note}")
-    fit = recorded["fit_residuals"]
-    if fit:
-        unit, scale, shown = ("deg", 1.0, "°") if recorded["kind"] == "bvh" else ("m", 1e3, " mm")
-        worst = max(fit, key=lambda k: fit[k][f"max_{unit}"])
-        median = max(v[f"median_{unit}"] for v in fit.values())
-        click.echo(
-            f"  IK fit of the {recorded['kind']} file ({len(fit)} targets): median residual at "
-            f"most {median * scale:.1f}{shown}, largest {fit[worst][f'max_{unit}'] * scale:.1f}"
-            f"{shown} ({worst} at {fit[worst]['max_time_s']:g} s); per frame in timeline.csv"
-        )
-    click.echo(f"recovery law: {recovery_law}")
-    click.echo(f"endurance rule: {report['endurance_rule']}\n")
-    groups = report["half_joints"]
-    keep = shown_groups(
-        [max(g["peak_load_pct_mvc"], 100 * g["max_fatigue"]) for g in groups],
-        [g["peak_load_pct_mvc"] > 100 for g in groups],
-        show_all,
-    )
-    header = [
-        "half-joint",
-        "mean load (%MVC)",
-        "peak load (%MVC)",
-        "first at fatigue threshold (s)",
-        "max fatigue",
-        "final fatigue",
-    ]
-    rows = [
-        [
-            g["half_joint"],
-            g["mean_load_pct_mvc"],
-            g["peak_load_pct_mvc"],
-            g["first_fatigue_threshold_s"],
-            g["max_fatigue"],
-            g["final_fatigue"],
-        ]
-        for g in (groups[k] for k in keep)
-    ]
-    click.echo(table(header, rows, digits=2))
-    hidden = [g for k, g in enumerate(groups) if k not in keep]
-    if hidden:
-        peak = max(g["peak_load_pct_mvc"] for g in hidden)
-        click.echo(
-            f"... {len(hidden)} more half-joints peak at most at {peak:.1f} %MVC; "
-            "--all prints every row"
-        )
-    click.echo()
-    return echo_outcome(run, report, files, show_all)
 
 
 def _echo_prediction(comparison: PredictionComparison, files: list[Path]) -> None:

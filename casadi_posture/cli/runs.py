@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -146,9 +147,10 @@ def simulate(
 )
 @FORCE_OPTION
 def rerun(manifest: str, out: Path | None, force: bool) -> None:
-    """Repeat the simulation a manifest.json records (the problem's data after its
-    overrides, the solver) and check that its summary.json is the same, byte for byte,
-    as the one beside the manifest. Exit code 1 when it differs.
+    """Repeat the simulation (or the evaluation of a recording) a manifest.json records (the
+    problem's data after its overrides, the solver; the recording, unchanged, and how it was
+    read) and check that its summary.json is the same, byte for byte, as the one beside the
+    manifest. Exit code 1 when it differs.
 
     \b
     Example:
@@ -166,9 +168,16 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
                 raise ProblemError(path, "problem_data", MISSING, error.expected) from None
             key = f"problem_data.{error.key}"
             raise ProblemError(path, key, error.value, error.expected) from None
-        run = api.simulate(resolved, record["solver"])
+        recording = record.get("recording")
+        if recording is None:
+            run = api.simulate(resolved, record["solver"])
+        else:
+            options = ("solver", "resample_s", "repeat_times", "until_s")
+            read_with = {k: recording.get(k) for k in options}
+            run = api.evaluate(resolved, _recording(path, recording), **read_with)
         files = write_run(run, out, command_line())
-    code = _report(run, files, law(resolved))
+    report = _report if recording is None else report_recording
+    code = report(run, files, law(resolved))
     original = path.parent / "summary.json"
     if not original.exists():
         click.echo(f"FLAGGED: no summary.json beside {path}: the rerun was not compared")
@@ -176,6 +185,21 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
     same = original.read_bytes() == (out / "summary.json").read_bytes()
     click.echo(f"summary.json {'identical to' if same else 'DIFFERS from'} {original}")
     raise SystemExit(code or (0 if same else 1))
+
+
+def _recording(path: Path, recorded: dict[str, Any]) -> Path:
+    """The motion file an evaluate manifest (``path``) records, as it was: a file that is
+    gone or has changed since is a one-line error."""
+    source = Path(recorded["source"])
+    if not source.is_file():
+        raise ProblemError(path, "recording.source", str(source), "the recording, still there")
+    sha256 = hashlib.sha256(source.read_bytes()).hexdigest()
+    if sha256 != recorded["sha256"]:
+        expected = (
+            f"the recording as it was (SHA-256 {recorded['sha256'][:12]}…, now {sha256[:12]}…)"
+        )
+        raise ProblemError(path, "recording.source", str(source), expected)
+    return source
 
 
 def _manifest(path: Path) -> dict[str, Any]:
@@ -189,12 +213,9 @@ def _manifest(path: Path) -> dict[str, Any]:
     missing = [k for k in ("problem_data", "problem_path", "solver") if k not in record]
     if not isinstance(record, dict) or missing:
         raise ProblemError(path, None, None, "a manifest.json written by simulate")
-    if "recording" in record:
-        expected = (
-            "a manifest.json written by simulate (this one is evaluate's: run "
-            f"casadi-posture evaluate again with --motion {record['recording']['source']})"
-        )
-        raise ProblemError(path, "recording", MISSING, expected)
+    recording = record.get("recording")
+    if recording is not None and not {"source", "sha256", "solver"} <= set(recording):
+        raise ProblemError(path, "recording", MISSING, "a manifest.json written by evaluate")
     return record
 
 
@@ -318,6 +339,69 @@ def echo_outcome(
     if result.stop == "interrupted" or interrupt.requested():
         return INTERRUPTED
     return 1 if report["flags"] else 0
+
+
+def report_recording(
+    run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool = False
+) -> int:
+    """Print what evaluate shows: the recording, the groups' loads over it (on a large body
+    the most loaded, unless ``show_all``), the outcome; its exit code."""
+    result, report = run.result, run.summary()
+    recorded = report["recording"]
+    click.echo(
+        f"{result.problem.path} driven by {recorded['source']}: {recorded['frames']} frames, "
+        f"{recorded['first_time_s']:g} to {recorded['last_time_s']:g} s; "
+        f"{result.wall_time_s:.2f} s wall"
+    )
+    for note in recorded["notes"]:
+        click.echo(f"  {note}")
+    fit = recorded["fit_residuals"]
+    if fit:
+        unit, scale, shown = ("deg", 1.0, "°") if recorded["kind"] == "bvh" else ("m", 1e3, " mm")
+        worst = max(fit, key=lambda k: fit[k][f"max_{unit}"])
+        median = max(v[f"median_{unit}"] for v in fit.values())
+        click.echo(
+            f"  IK fit of the {recorded['kind']} file ({len(fit)} targets): median residual at "
+            f"most {median * scale:.1f}{shown}, largest {fit[worst][f'max_{unit}'] * scale:.1f}"
+            f"{shown} ({worst} at {fit[worst]['max_time_s']:g} s); per frame in timeline.csv"
+        )
+    click.echo(f"recovery law: {recovery_law}")
+    click.echo(f"endurance rule: {report['endurance_rule']}\n")
+    groups = report["half_joints"]
+    keep = shown_groups(
+        [max(g["peak_load_pct_mvc"], 100 * g["max_fatigue"]) for g in groups],
+        [g["peak_load_pct_mvc"] > 100 for g in groups],
+        show_all,
+    )
+    header = [
+        "half-joint",
+        "mean load (%MVC)",
+        "peak load (%MVC)",
+        "first at fatigue threshold (s)",
+        "max fatigue",
+        "final fatigue",
+    ]
+    rows = [
+        [
+            g["half_joint"],
+            g["mean_load_pct_mvc"],
+            g["peak_load_pct_mvc"],
+            g["first_fatigue_threshold_s"],
+            g["max_fatigue"],
+            g["final_fatigue"],
+        ]
+        for g in (groups[k] for k in keep)
+    ]
+    click.echo(table(header, rows, digits=2))
+    hidden = [g for k, g in enumerate(groups) if k not in keep]
+    if hidden:
+        peak = max(g["peak_load_pct_mvc"] for g in hidden)
+        click.echo(
+            f"... {len(hidden)} more half-joints peak at most at {peak:.1f} %MVC; "
+            "--all prints every row"
+        )
+    click.echo()
+    return echo_outcome(run, report, files, show_all)
 
 
 def _minutes(value: float | None, verdict: str | None) -> float | None:

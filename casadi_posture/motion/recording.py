@@ -7,6 +7,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,8 +34,11 @@ class Recording:
     flags: tuple[str, ...] = ()
     #: Per frame, whether each of the problem's loads is held (1) or not (0); None: all held.
     held: np.ndarray | None = None
-    #: A marker recording's fit: per landmark, its distance from its markers per frame [m].
+    #: An IK fit's residuals per frame: per point, its distance from its markers [m] (C3D),
+    #: or per joint, its segment's angle from the joint's orientation [rad] (BVH).
     residuals: dict[str, np.ndarray] | None = None
+    #: How it was read, enough to read it again: the file's SHA-256 and the reader's options.
+    read_with: dict[str, Any] | None = None
 
     @property
     def frames(self) -> int:

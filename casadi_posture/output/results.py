@@ -430,7 +430,11 @@ def manifest(result: SimulationResult, command: list[str] | None = None) -> dict
             "share_outside_ik": 1.0 - result.ik_time_s / max(result.wall_time_s, 1e-12),
         },
         "resolved_problem": description(problem),
-        **({} if result.recording is None else {"recording": recording_summary(result)}),
+        **(
+            {}
+            if result.recording is None
+            else {"recording": {**recording_summary(result), **(result.recording.read_with or {})}}
+        ),
     }
 
 
