@@ -139,20 +139,10 @@ class Orientation(Task):
 
 
 @dataclass(frozen=True)
-class Frame(Task):
-    """Frame of a segment at a target orientation, axis by axis: e = vec(R − Rt), 9 rows, of
-    norm 2√2·sin(angle/2) [rad-like]; zero only at R = Rt, where ``Orientation``'s error also
-    vanishes at a half turn, a stationary point a solver can stop at (recorded motion)."""
-
-    segment: str
-    dof: str | None
-    rotation: tuple[float, ...]
-
-    step_limit = ANGULAR_STEP
-    unit = "rad"
-
-    def targets(self) -> np.ndarray:
-        return np.array(self.rotation, dtype=float)
+class Frame(Orientation):
+    """``Orientation``, axis by axis: e = vec(R − Rt), 9 rows, of norm 2√2·sin(angle/2)
+    [rad-like]; zero only at R = Rt, where ``Orientation``'s error also vanishes at a half
+    turn, a stationary point a solver can stop at (recorded motion)."""
 
     def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
         return ca.reshape(body.rotation(self.dof) - ca.reshape(p, 3, 3), 9, 1)
