@@ -293,3 +293,19 @@ def test_rerun_repeats_an_evaluation_and_refuses_a_changed_recording(tmp_path: P
         main, ["rerun", str(out / "manifest.json"), "--out", str(tmp_path / "r2")]
     )
     assert changed.exit_code == 2 and "the recording as it was" in changed.output
+
+
+def test_compare_prediction_without_tasks_is_refused_before_anything_runs(tmp_path: Path) -> None:
+    import tomllib
+
+    data = tomllib.loads(Path(ARM).read_text())
+    file = tmp_path / "no_tasks.toml"
+    text = Path(ARM).read_text()
+    file.write_text(text[: text.index("[[tasks]]")] + text[text.index("[fatigue]") :])
+    assert "tasks" in data and "tasks" not in tomllib.loads(file.read_text())
+    path = _arm_csv(tmp_path / "m.csv", [10.0, 20.0], [5.0, 5.0])
+    out = tmp_path / "out"
+    command = ["evaluate", str(file), "--motion", str(path), "--out", str(out)]
+    result = CliRunner().invoke(main, [*command, "--compare-prediction"])
+    assert result.exit_code == 2 and "at least one task" in result.output
+    assert not out.exists()

@@ -18,7 +18,7 @@ from casadi_posture.cli.common import (
     problem_from,
 )
 from casadi_posture.cli.runs import report_recording, write_run
-from casadi_posture.errors import ProblemError
+from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
 from casadi_posture.runs.prediction import (
     SHOWN_DOFS,
@@ -118,6 +118,9 @@ def evaluate(
         raise ProblemError(None, "--repeat", repeat_times, "--repeat or --until, not both")
     with interrupt.deferred():
         resolved = problem_from(problem, sets=sets)
+        if compare and not resolved.spec.tasks:
+            expected = "at least one task to predict a posture from (--compare-prediction)"
+            raise ProblemError(resolved.path, "tasks", MISSING, expected)
         recording = api.read_motion(
             resolved,
             motion,

@@ -149,7 +149,9 @@ def _read(path: Path):
         raise ProblemError(path, None, None, expected) from None
     if not path.is_file():
         raise ProblemError(path, None, None, "a BVH file that exists")
-    if not path.read_bytes()[:64].lstrip().upper().startswith(b"HIERARCHY"):
+    with path.open("rb") as handle:
+        head = handle.read(64)
+    if not head.lstrip().upper().startswith(b"HIERARCHY"):
         raise ProblemError(path, None, None, "a BVH file (it starts with HIERARCHY)")
     try:
         skeleton = bvhio.readAsBvh(str(path))
