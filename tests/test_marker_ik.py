@@ -337,6 +337,7 @@ def test_evaluate_drives_the_body_with_a_c3d_file(recorded: tuple, tmp_path: Pat
     np.testing.assert_allclose(got, q, atol=1e-6)
     assert max(float(r["marker_residual_elbow_r_m"]) for r in rows) < 1e-4
     assert [r["held_part"] for r in rows] == ["1", "1", "0", "0"]
+    assert "fit to the markers (mm)" not in (out / "report.html").read_text()  # it has a task
 
 
 def test_calibration_places_markers_that_sit_off_their_landmarks(seated: cp.Problem) -> None:
@@ -373,3 +374,19 @@ def test_calibration_places_markers_that_sit_off_their_landmarks(seated: cp.Prob
     assert np.degrees(np.abs(uncalibrated.q - q).max()) > 20.0
     with pytest.raises(ProblemError, match="calibrate_s"):
         markers_to_recording(*args, problem=Path("p.toml"), calibration_s=(5.0, 6.0))
+
+
+def test_the_report_of_a_recording_without_tasks_shows_the_marker_fit(
+    recorded: tuple, tmp_path: Path
+) -> None:
+    """No task, so no task residual: the page's third panel is each point's fit [mm]."""
+    import tomllib
+
+    _, _, mapping, path = recorded
+    data = tomllib.loads(Path(SEATED).read_text())
+    del data["tasks"]
+    data["motion"] = {"markers": mapping}
+    run = cp.evaluate(cp.from_dict(data, "no_tasks.toml"), path)
+    run.write(tmp_path / "out")
+    page = (tmp_path / "out" / "report.html").read_text()
+    assert "fit to the markers (mm)" in page and "task residuals" not in page

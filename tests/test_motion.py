@@ -276,6 +276,7 @@ def test_a_problem_without_tasks_evaluates_and_draws(tmp_path: Path) -> None:
     assert (tmp_path / "out" / "effector.png") in written
     task = run.summary()["task"]
     assert task["level1"] is None and task["held_s"] == 2.0
+    assert "task residuals" in (tmp_path / "out" / "report.html").read_text()
 
 
 def test_rerun_repeats_an_evaluation_and_refuses_a_changed_recording(tmp_path: Path) -> None:

@@ -100,7 +100,9 @@ def _curves_figure(
     groups = shown_groups(result)
     back = step_low_back(result)
     scores = score_columns(result, step_scores(result))
-    rows = ["fatigue (0-1)", "load (%MVC)", "task residuals"]
+    fitted = _fit_residuals(result)
+    third = "task residuals" if result.level_names or not fitted else fitted[0]
+    rows = ["fatigue (0-1)", "load (%MVC)", third]
     rows += ["L5/S1 compression (N)"] if back is not None else []
     rows += ["RULA / REBA score"] if scores else []
     rows.append("events")
@@ -135,6 +137,13 @@ def _curves_figure(
             ),
             3, 1,
         )  # fmt: skip
+    if fitted and not result.level_names:
+        for name, values in fitted[1].items():
+            fig.add_trace(
+                go.Scatter(x=t, y=rounded(np.maximum(values[steps], floor)), mode="lines",
+                           legend="legend2", name=name, line={"width": 1.2}),
+                3, 1,
+            )  # fmt: skip
     fig.update_yaxes(type="log", row=3, col=1, exponentformat="power")
     row = 4
     if back is not None:
@@ -244,6 +253,20 @@ def summary_html(report: dict[str, Any]) -> str:
         else "<p class='ok'>No flags: the answer can be used as it is.</p>"
     )
     return f"<ul>{items}</ul>{verdict}"
+
+
+def _fit_residuals(result: SimulationResult) -> tuple[str, dict[str, np.ndarray]] | None:
+    """A recording's IK fit per frame, for the panel a run's task residuals take: its title
+    and each fitted point's residual (C3D: mm; BVH: deg); None for any other run."""
+    recording = result.recording
+    if recording is None or not recording.residuals:
+        return None
+    size = result.timeline.time.size
+    if recording.kind == "bvh":
+        values = {k: np.degrees(v[:size]) for k, v in recording.residuals.items()}
+        return "fit to the BVH joints (deg)", values
+    values = {k: 1e3 * v[:size] for k, v in recording.residuals.items()}
+    return "fit to the markers (mm)", values
 
 
 def _when(seconds: float) -> tuple[float, str]:
