@@ -220,28 +220,17 @@ def read_motion(
     ``motion.held_s`` windows; resampled every ``resample_s`` [s] if given, then played
     ``repeat_times`` times or until ``until_s`` [s] as a work cycle."""
     path, spec = Path(motion), problem.spec.motion
-    if path.suffix.lower() == ".c3d":
-        check_solver(solver, problem.path)
-        recording, _ = read_c3d_recording(
-            path,
-            problem.body,
-            spec,
-            problem.posture,
-            solver or problem.spec.solver.name,
-            problem=problem.path,
-            solver_spec=problem.spec.solver if solver is None else None,
-        )
-    elif path.suffix.lower() == ".bvh":
-        check_solver(solver, problem.path)
-        recording = read_bvh(
-            path,
-            problem.body,
-            spec.bvh,
-            problem.posture,
-            solver or problem.spec.solver.name,
-            problem=problem.path,
-            solver_spec=problem.spec.solver if solver is None else None,
-        )
+    check_solver(solver, problem.path)
+    ik = {
+        "solver_name": solver or problem.spec.solver.name,
+        "problem": problem.path,
+        "solver_spec": problem.spec.solver if solver is None else None,
+    }  # the file's solver options are for the file's solver
+    kind = path.suffix.lower()
+    if kind == ".c3d":
+        recording, _ = read_c3d_recording(path, problem.body, spec, problem.posture, **ik)
+    elif kind == ".bvh":
+        recording = read_bvh(path, problem.body, spec.bvh, problem.posture, **ik)
     else:
         recording = read_angles(path, problem.body, spec, problem.posture, problem.path)
     names = [load.name for load in problem.loads]

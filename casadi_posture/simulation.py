@@ -340,15 +340,7 @@ def _replay(problem: Problem, recording: Recording) -> SimulationResult:
             )
         )
     state.events = [e for e in state.events if e.kind not in ("constraint_on", "constraint_off")]
-    result = _result(run, state, started, recording)
-    if recording.held is None:
-        return result
-    steps = result.timeline.time.size
-    held = recording.held[:steps]
-    timeline = replace(
-        result.timeline, held=held, balance=_balance(problem, result.timeline.q, held)
-    )
-    return replace(result, timeline=timeline)
+    return _result(run, state, started, recording)
 
 
 def _replay_setup(problem: Problem) -> _Setup:
@@ -671,7 +663,8 @@ def _result(
     a replay's ``recording``."""
     hierarchy = run.hierarchy
     levels = () if hierarchy is None else hierarchy.levels
-    timeline = _timeline(run, state.record)
+    held = None if recording is None else recording.held
+    timeline = _timeline(run, state.record, held)
     return SimulationResult(
         run.problem,
         run.solver,
@@ -695,10 +688,13 @@ def _result(
     )
 
 
-def _timeline(run: _Setup, record: _Recorder) -> Timeline:
-    """The recorded rows as the timeline's arrays, the distance along the line [m], balance."""
+def _timeline(run: _Setup, record: _Recorder, held: np.ndarray | None = None) -> Timeline:
+    """The recorded rows as the timeline's arrays, the distance along the line [m], balance
+    (with the loads each step holds: ``held``, a recording's, per frame 0/1 per load)."""
     body, names = run.problem.body, run.names
     count = len(record.rows.get("q", []))
+    held = None if held is None else held[:count]
+    postures = _rows(record, "q", count, body.n)
     effector_path = record.array("effector") if count else np.zeros((0, 3))
     along = None
     if run.line is not None:
@@ -706,7 +702,7 @@ def _timeline(run: _Setup, record: _Recorder) -> Timeline:
         along = (effector_path - np.asarray(run.line.point)) @ direction
     return Timeline(
         record.array("time") if count else np.zeros(0),
-        _rows(record, "q", count, body.n),
+        postures,
         effector_path,
         along,
         *(
@@ -726,7 +722,8 @@ def _timeline(run: _Setup, record: _Recorder) -> Timeline:
         _rows(record, "residuals", count, run.depth),
         list(record.rows.get("solver", [])),
         list(record.rows.get("phase", [])),
-        _balance(run.problem, _rows(record, "q", count, body.n)) if count else None,
+        _balance(run.problem, postures, held) if count else None,
+        held,
     )
 
 

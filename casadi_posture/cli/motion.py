@@ -152,23 +152,16 @@ def _echo_prediction(comparison: PredictionComparison, files: list[Path]) -> Non
     click.echo(table(["outcome", "recorded", "predicted"], rows, digits=2))
     click.echo()
     postures = comparison.postures()[:SHOWN_DOFS]
-    header = [
-        "dof",
-        "recorded first (deg)",
-        "predicted start (deg)",
-        "recorded mean (deg)",
-        "predicted mean (deg)",
-        "RMS difference (deg)",
-    ]
-    keys = [
-        "dof",
-        "recorded_first_deg",
-        "predicted_start_deg",
-        "recorded_mean_deg",
-        "predicted_mean_deg",
-        "rms_difference_deg",
-    ]
-    click.echo(table(header, [[r[k] for k in keys] for r in postures], digits=1))
+    columns = {
+        "dof": "dof",
+        "recorded_first_deg": "recorded first (deg)",
+        "predicted_start_deg": "predicted start (deg)",
+        "recorded_mean_deg": "recorded mean (deg)",
+        "predicted_mean_deg": "predicted mean (deg)",
+        "rms_difference_deg": "RMS difference (deg)",
+    }
+    rows = [[r[k] for k in columns] for r in postures]
+    click.echo(table(list(columns.values()), rows, digits=1))
     for flag in comparison.predicted_summary["flags"]:
         click.echo(f"FLAGGED (predicted): {flag}")
     click.echo("files: " + ", ".join(str(f) for f in files))

@@ -14,9 +14,6 @@ import numpy as np
 from casadi_posture.errors import ProblemError
 from casadi_posture.spec.schema import MAX_DURATION_S, MAX_STEPS
 
-#: The kinds of file a recording is read from.
-KINDS = ("angles", "bvh", "c3d")
-
 
 @dataclass(frozen=True)
 class Recording:
@@ -49,10 +46,6 @@ class Recording:
     def duration_s(self) -> float:
         """The time from the first frame to the last [s]."""
         return float(self.time[-1] - self.time[0])
-
-    def noted(self, *, notes: tuple[str, ...] = (), flags: tuple[str, ...] = ()) -> Recording:
-        """The same frames with more notes and flags."""
-        return replace(self, notes=self.notes + notes, flags=self.flags + flags)
 
 
 def check_times(time: np.ndarray, source: Path, column: str) -> None:
