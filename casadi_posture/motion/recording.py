@@ -43,6 +43,12 @@ class Recording:
         return int(self.time.size)
 
     @property
+    def residual_unit(self) -> tuple[str, float]:
+        """The unit the fit's ``residuals`` are given in outside, and its factor from them:
+        degrees for a BVH file's joints, metres for markers."""
+        return ("deg", 180 / math.pi) if self.kind == "bvh" else ("m", 1.0)
+
+    @property
     def duration_s(self) -> float:
         """The time from the first frame to the last [s]."""
         return float(self.time[-1] - self.time[0])

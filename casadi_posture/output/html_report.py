@@ -262,11 +262,12 @@ def _fit_residuals(result: SimulationResult) -> tuple[str, dict[str, np.ndarray]
     if recording is None or not recording.residuals:
         return None
     size = result.timeline.time.size
-    if recording.kind == "bvh":
-        values = {k: np.degrees(v[:size]) for k, v in recording.residuals.items()}
-        return "fit to the BVH joints (deg)", values
-    values = {k: 1e3 * v[:size] for k, v in recording.residuals.items()}
-    return "fit to the markers (mm)", values
+    unit, scale = recording.residual_unit
+    what = "BVH joints"
+    if unit == "m":  # markers, shown in mm
+        what, unit, scale = "markers", "mm", 1e3 * scale
+    values = {k: scale * v[:size] for k, v in recording.residuals.items()}
+    return f"fit to the {what} ({unit})", values
 
 
 def _when(seconds: float) -> tuple[float, str]:

@@ -174,15 +174,20 @@ def schedule_summary(result: SimulationResult) -> dict[str, Any] | None:
     }
 
 
+def time_mean(values: np.ndarray, time: np.ndarray) -> float:
+    """The mean over time of ``values`` at ``time`` [s] (trapezoids; one frame: its value)."""
+    span = float(time[-1] - time[0]) if time.size > 1 else 0.0
+    if span <= 0:
+        return float(values[0])
+    return float(np.sum((values[1:] + values[:-1]) * np.diff(time))) / 2 / span
+
+
 def _add_recorded_loads(groups: list[dict[str, Any]], time: np.ndarray, load: np.ndarray) -> None:
     """A recording's load of each group over it [%MVC]: its peak and its mean over time."""
-    span = float(time[-1] - time[0]) if time.size > 1 else 0.0
     for k, group in enumerate(groups):
         values = load[:, k]
-        area = float(np.sum((values[1:] + values[:-1]) * np.diff(time))) / 2
-        mean = area / span if span > 0 else float(values[0])
         group["peak_load_pct_mvc"] = float(values.max()) if values.size else None
-        group["mean_load_pct_mvc"] = float(mean) if values.size else None
+        group["mean_load_pct_mvc"] = time_mean(values, time) if values.size else None
 
 
 def recording_summary(result: SimulationResult) -> dict[str, Any]:
@@ -192,7 +197,7 @@ def recording_summary(result: SimulationResult) -> dict[str, Any]:
     orientation [deg] (median, largest and when)."""
     recording = result.recording
     assert recording is not None
-    scale, unit = (180 / np.pi, "deg") if recording.kind == "bvh" else (1.0, "m")
+    unit, scale = recording.residual_unit
     fit = {
         name: {
             f"median_{unit}": float(np.median(residual)) * scale,
@@ -508,11 +513,9 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
             columns[f"held_{load.name}"] = [int(v) for v in tl.held[:, j]]
     recording = result.recording
     for name, residual in ((recording and recording.residuals) or {}).items():
-        values = residual[: tl.time.size]
-        if recording.kind == "bvh":
-            columns[f"bvh_residual_{name}_deg"] = np.degrees(values).tolist()
-        else:
-            columns[f"marker_residual_{name}_m"] = values.tolist()
+        unit, scale = recording.residual_unit
+        fitted = "bvh" if recording.kind == "bvh" else "marker"
+        columns[f"{fitted}_residual_{name}_{unit}"] = (scale * residual[: tl.time.size]).tolist()
     if tl.balance is not None:
         ground, margins = tl.balance
         columns["com_x_m"] = ground[:, 0].tolist()

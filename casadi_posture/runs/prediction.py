@@ -13,7 +13,7 @@ import numpy as np
 
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.plain import dumps
-from casadi_posture.output.results import summary, write_table
+from casadi_posture.output.results import summary, time_mean, write_table
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.simulation import SimulationResult, simulate
 
@@ -46,9 +46,9 @@ class PredictionComparison:
                     "dof": dof,
                     "recorded_first_deg": float(recorded[0]),
                     "predicted_start_deg": float(predicted[0]),
-                    "recorded_mean_deg": _mean(recorded, time),
-                    "predicted_mean_deg": _mean(predicted, time),
-                    "rms_difference_deg": math.sqrt(_mean((recorded - predicted) ** 2, time)),
+                    "recorded_mean_deg": time_mean(recorded, time),
+                    "predicted_mean_deg": time_mean(predicted, time),
+                    "rms_difference_deg": math.sqrt(time_mean((recorded - predicted) ** 2, time)),
                 }
             )
         return sorted(rows, key=lambda r: -r["rms_difference_deg"])
@@ -63,14 +63,6 @@ class PredictionComparison:
             for recorded, predicted in [pairs]
             for name in recorded
         ]
-
-
-def _mean(values: np.ndarray, time: np.ndarray) -> float:
-    """The mean over time of values at ``time`` [s] (trapezoids; one frame: its value)."""
-    span = float(time[-1] - time[0]) if time.size > 1 else 0.0
-    if span <= 0:
-        return float(values[0])
-    return float(np.sum((values[1:] + values[:-1]) * np.diff(time)) / 2 / span)
 
 
 def _outcome(report: dict[str, Any]) -> dict[str, Any]:
