@@ -210,10 +210,8 @@ def _rest(body: BodyModel, spec: BvhSpec, dofs: list[str]) -> tuple[np.ndarray, 
     q = np.zeros(body.n)
     for dof, angle in spec.rest_deg.items():
         q[body.index[dof]] = math.radians(angle)
-    frames = {
-        d: np.array(ca.evalf(ca.substitute(body.rotation(d), body.q, ca.DM(q)))) for d in dofs
-    }
-    return q, frames
+    rotations = ca.Function("rest", [body.q], [body.rotation(d) for d in dofs]).call([q])
+    return q, {d: np.asarray(r, dtype=float) for d, r in zip(dofs, rotations, strict=True)}
 
 
 def _flags(residuals: dict[str, np.ndarray], time: np.ndarray, limit_deg: float) -> list[str]:

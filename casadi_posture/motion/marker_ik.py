@@ -197,12 +197,19 @@ def calibrated(
     placed = markers @ rotation.T + translation
     segments = {s.name: s.dof for s in body.segments}
     out = {n: lm for n, lm in body.landmarks.items() if n not in points}
-    for name, x in zip(names, placed, strict=True):
-        dof = body.landmarks[name].dof if name in body.landmarks else segments[name.split(".")[0]]
-        turn = ca.Function("turn", [body.q], [body.rotation(dof), body.point(dof, (0, 0, 0))])
-        r, c = (np.asarray(v, dtype=float) for v in turn(posture))
-        position = tuple(r.T @ (x - c.ravel()))
-        out[name] = Landmark(name, dof, position)
+    dofs = [
+        body.landmarks[n].dof if n in body.landmarks else segments[n.split(".")[0]] for n in names
+    ]
+    carried = list(dict.fromkeys(dofs))  # each DOF's frame at the posture, in one call
+    frames = ca.Function(
+        "frames",
+        [body.q],
+        [x for d in carried for x in (body.rotation(d), body.point(d, (0, 0, 0)))],
+    )(posture)
+    for name, dof, x in zip(names, dofs, placed, strict=True):
+        k = carried.index(dof)
+        r, c = (np.asarray(v, dtype=float) for v in frames[2 * k : 2 * k + 2])
+        out[name] = Landmark(name, dof, tuple(r.T @ (x - c.ravel())))
     moved = np.linalg.norm(placed[[names.index(n) for n in known]] - model, axis=1).max()
     body = BodyModel(
         body.name,
