@@ -19,7 +19,13 @@ from casadi_posture.cli import main
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import SOLVER_NAMES
 from casadi_posture.ik.tasks import rotation_rpy
-from casadi_posture.motion.marker_ik import markers_to_recording, read_c3d_recording, rigid_fit
+from casadi_posture.motion.marker_ik import (
+    anchors,
+    markers_to_recording,
+    read_c3d_recording,
+    rigid_fit,
+    upright_fit,
+)
 from casadi_posture.motion.markers import Markers, read_c3d
 
 SEATED = "problems/seated_assembly.toml"
@@ -278,6 +284,71 @@ def test_the_rigid_fit_finds_a_known_rotation_and_translation() -> None:
     assert np.linalg.det(r) == pytest.approx(1.0)
 
 
+def test_the_upright_fit_keeps_the_lab_vertical_and_finds_the_turn_about_it() -> None:
+    """A lab whose vertical is its y axis (an OptiTrack habit): points turned by a known
+    rotation that takes y onto z give it back; with the points moved off that rotation
+    (a bent arm where the body's is straight), the lab's vertical still lands on z exactly
+    where a free fit (Kabsch) tilts it."""
+    to_z = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # y -> z
+    yaw = rotation_rpy(0.0, 0.0, 2.0)
+    truth = yaw @ to_z
+    points = np.array([[0.0, 0.0, 0.0], [0.3, 0.5, 0.1], [0.0, 0.2, 0.4], [0.1, 1.1, 0.4]])
+    r, t = upright_fit(points, points @ truth.T + T_LAB, (0.0, 1.0, 0.0))
+    np.testing.assert_allclose(r, truth, atol=1e-12)
+    np.testing.assert_allclose(t, T_LAB, atol=1e-12)
+    bent = points @ truth.T + T_LAB + np.array([[0, 0, 0], [0.1, 0, 0.2], [0, 0, 0], [0, 0.1, 0]])
+    r, _ = upright_fit(points, bent, (0.0, 1.0, 0.0))
+    np.testing.assert_allclose(r @ (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), atol=1e-12)
+    free, _ = rigid_fit(points, bent)
+    assert np.linalg.norm(free @ (0.0, 1.0, 0.0) - (0.0, 0.0, 1.0)) > 0.05
+    r, _ = upright_fit(points, points @ np.diag([1.0, -1.0, -1.0]).T, (0.0, 0.0, -1.0))
+    np.testing.assert_allclose(r, np.diag([1.0, -1.0, -1.0]), atol=1e-12)  # upside down
+
+
+def test_anchors_hang_each_point_from_the_nearest_fitted_joint_up_its_chain(
+    seated: cp.Problem,
+) -> None:
+    names = ("mid_hip", "l5s1", "hip_r", "c7", "shoulder_r", "elbow_r", "wrist_r", "knuckles_r")
+    got = anchors(seated.body, names, ("mid_hip", "l5s1", "hip_r"))
+    assert got == {"elbow_r": "shoulder_r", "wrist_r": "elbow_r", "knuckles_r": "wrist_r"}
+    got = anchors(seated.body, ("mid_hip", "l5s1", "hip_r", "c7", "wrist_r"), ("mid_hip",))
+    assert got == {"wrist_r": "c7"}  # no elbow mapped: the next joint up that is
+
+
+@pytest.mark.parametrize("solver", SOLVER_NAMES)
+def test_fitting_segments_gives_the_arm_back_when_the_shoulder_rises(
+    seated: cp.Problem, solver: str
+) -> None:
+    """The right shoulder and everything beyond it 4 cm higher than the body has them (a
+    shoulder girdle elevated, which the body has not). Fitted as segments (each point from
+    its anchor), the elbow, wrist and hand come back to 1e-5 rad and fit exactly; only the
+    raised shoulder point is off (37 mm: it turns the trunk a little, 4°, which the shoulder
+    angles take back). Fitted as positions, the arm reaches for the raised points: the
+    elbow 3° off, the shoulder 9°, every arm point off."""
+    body = seated.body
+    names = ("mid_hip", "l5s1", "hip_r", "hip_l", "c7", "vertex", "shoulder_r", "elbow_r",
+             "wrist_r", "knuckles_r")  # fmt: skip
+    q = _motion(seated, MOVED_DEG)
+    world = _in_lab(body, names, q) @ R_LAB.T + T_LAB
+    world[:, 6:] += (0.0, 0.0, 0.04)
+    markers = Markers(Path("raised.c3d"), np.arange(FRAMES) / RATE_HZ, names, world)
+    args = (markers, body, {n: [n] for n in names}, seated.posture, solver)
+    distal = [body.index[d] for d in ("elbow_flexion_r", "wrist_flexion_r", "wrist_deviation_r")]
+    shoulder = [body.index[f"shoulder_{d}_r"] for d in ("flexion", "abduction", "rotation")]
+    recording, fit = markers_to_recording(*args, segments=True, max_residual_m=0.05)
+    np.testing.assert_allclose(recording.q[:, distal], q[:, distal], atol=1e-5)  # IPOPT's tol
+    assert fit.residuals[:, 7:].max() < 1e-6
+    assert 0.03 < fit.residuals[:, 6].min() <= fit.residuals[:, 6].max() < 0.04
+    positions, by_position = markers_to_recording(*args, max_residual_m=0.05)
+    assert np.degrees(np.abs(positions.q[:, distal] - q[:, distal]).max()) > 2.0
+    assert by_position.residuals[:, 7:].min() > 2e-3
+
+    def worst(got: np.ndarray) -> float:
+        return float(np.degrees(np.abs(got[:, shoulder] - q[:, shoulder]).max()))
+
+    assert worst(recording.q) < 0.5 * worst(positions.q)
+
+
 def test_a_mapping_that_does_not_fit_the_body_or_the_file_is_a_one_line_error(
     recorded: tuple,
 ) -> None:
@@ -367,13 +438,14 @@ def test_calibration_places_markers_that_sit_off_their_landmarks(seated: cp.Prob
         Path("off.c3d"), np.arange(len(q)) / RATE_HZ, tuple(n.upper() for n in LANDMARKS), lab
     )
     args = (markers, body, mapping, seated.posture, "lexicographic")
-    recording, _ = markers_to_recording(*args, calibration_s=(0.0, 0.0))
+    up = R_LAB.T @ (0.0, 0.0, 1.0)  # the body's vertical in the lab
+    recording, _ = markers_to_recording(*args, calibration_s=(0.0, 0.0), lab_up=up)
     assert np.degrees(np.abs(recording.q - q).max()) < 6.0
     assert any("calibrated on 0-0 s" in n for n in recording.notes)
     uncalibrated, _ = markers_to_recording(*args)
     assert np.degrees(np.abs(uncalibrated.q - q).max()) > 20.0
     with pytest.raises(ProblemError, match="calibrate_s"):
-        markers_to_recording(*args, problem=Path("p.toml"), calibration_s=(5.0, 6.0))
+        markers_to_recording(*args, problem=Path("p.toml"), calibration_s=(5.0, 6.0), lab_up=up)
 
 
 def test_the_report_of_a_recording_without_tasks_shows_the_marker_fit(

@@ -75,6 +75,22 @@ class Position(Task):
 
 
 @dataclass(frozen=True)
+class Offset(Task):
+    """Effector at an offset from another landmark, the ``anchor``: e = x(q) − x_anchor(q) −
+    target [m] (a segment's vector between two joint centres, say)."""
+
+    effector: str
+    anchor: str
+    target: tuple[float, float, float]
+
+    def targets(self) -> np.ndarray:
+        return np.array(self.target, dtype=float)
+
+    def residual(self, body: BodyModel, p: ca.SX) -> ca.SX:
+        return body.landmark(self.effector) - body.landmark(self.anchor) - p
+
+
+@dataclass(frozen=True)
 class Line(Task):
     """Effector on a line through ``point`` along ``direction``: the offset from the line in
     an orthonormal basis of the plane normal to it (2 rows) [m]."""

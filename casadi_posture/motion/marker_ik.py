@@ -16,6 +16,12 @@ Then the IK from the last frame's posture: level 1 the other landmarks at their 
 (least squares over all of them), level 2 every DOF at the problem's posture, which only
 settles what the markers leave free (a hand's turn about its own axis); joint limits are
 the solver's. A landmark's residual is its distance from its target after the fit [m].
+
+Fitted as segments (``motion.fit = "segments"``), a point's target is its markers' offset
+from its anchor's, the fitted joint up its chain (an elbow from the shoulder): where the
+body has fewer joints than the subject (no shoulder girdle: the acromion rises 4-5 cm as
+the arm goes overhead), the segments beyond keep their measured directions instead of
+reaching for their places, and the error stays on the point the body cannot follow.
 """
 
 from __future__ import annotations
@@ -30,8 +36,9 @@ import numpy as np
 from casadi_posture.body.tree import BodyModel, Landmark
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.result import IKResult
 from casadi_posture.ik.solvers import cached_solver
-from casadi_posture.ik.tasks import JointReference, Position
+from casadi_posture.ik.tasks import JointReference, Offset, Position
 from casadi_posture.motion.angles import closest
 from casadi_posture.motion.markers import Markers, read_c3d
 from casadi_posture.motion.recording import Recording, fill_gaps
@@ -39,6 +46,12 @@ from casadi_posture.spec.schema import MotionSpec, SolverSpec
 
 #: The root's landmarks must lie at least this far [m] (RMS) off their best line.
 ROOT_SPREAD_M = 0.01
+#: The lab's vertical axis named as ``motion.lab_up`` names it, in the marker file's frame.
+LAB_AXES = {
+    axis: tuple(sign * float(i == j) for j in range(3))
+    for i, name in enumerate("xyz")
+    for sign, axis in ((1, name), (-1, f"-{name}"))
+}
 #: Runs of frames whose residual is above the threshold flagged one by one, at most.
 MAX_FLAGGED_RUNS = 10
 
@@ -83,6 +96,8 @@ def read_c3d_recording(
         max_residual_m=spec.max_marker_residual_m,
         solver_spec=solver_spec,
         calibration_s=None if spec.calibrate_s is None else tuple(spec.calibrate_s),
+        lab_up=LAB_AXES[spec.lab_up],
+        segments=spec.fit == "segments",
     )
 
 
@@ -98,34 +113,31 @@ def markers_to_recording(
     max_residual_m: float = 0.02,
     solver_spec: SolverSpec | None = None,
     calibration_s: tuple[float, float] | None = None,
+    lab_up: Sequence[float] = (0.0, 0.0, 1.0),
+    segments: bool = False,
 ) -> tuple[Recording, MarkerFit]:
     """The joint angles [rad] per frame that fit ``body``'s landmarks to the means of their
     markers (``mapping``: landmark → labels; ``problem`` names the file it came from),
     ``posture`` [rad] settling what they leave free, by the IK solver ``solver_name``.
     Marker gaps up to ``max_gap_s`` [s] are filled linearly and noted, longer ones filled and
     flagged; so are frames whose largest residual exceeds ``max_residual_m`` [m]. With
-    ``calibration_s`` ([start, end] [s]: frames where the subject stands in ``posture``),
-    each landmark first moves, on its segment, to where its markers are then
-    (``calibrated``)."""
+    ``calibration_s`` ([start, end] [s]: frames where the subject stands in ``posture``,
+    upright along the lab's ``lab_up`` axis), each point first moves, on its segment, to
+    where its markers are then (``calibrated``). With ``segments``, a point is fitted relative
+    to its anchor (``anchors``), the segments' directions rather than their places."""
     points = _points(markers, body, mapping, problem, calibration_s is not None)
     names = tuple(points)
     lab, notes, flags = _targets(markers, points, max_gap_s)
+    ik = {"solver_name": solver_name, "solver_spec": solver_spec, "problem": problem}
     if calibration_s is not None:
-        body, moved = calibrated(body, lab, markers.time, points, posture, calibration_s, problem)
+        still = lab[_window(markers.time, calibration_s, problem)].mean(axis=0)
+        body, moved = calibrated(body, still, points, posture, lab_up, problem, calibration_s)
         notes.append(
             f"calibrated on {calibration_s[0]:g}-{calibration_s[1]:g} s, the subject taken in "
             f"posture_deg there: markers placed on their segments, landmarks moved onto "
             f"their markers by up to {moved * 1e3:.0f} mm"
         )
-    roots = _roots(body, names, problem)
-    moving = [n for n in names if n not in roots]
-    tasks = [Position(f"marker_{n}", 1, n, (0.0, 0.0, 0.0)) for n in moving]
-    posture_task = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
-    hierarchy = TaskHierarchy(body, [*tasks, posture_task])
-    solver = cached_solver(solver_name, hierarchy, solver_spec)
-    rows = [names.index(n) for n in moving]
-    root_rows = [names.index(n) for n in roots]
-    at_root = np.array([body.landmarks[n].position for n in roots], dtype=float)
+    fitter = _Fitter(body, names, posture, max_residual_m, segments=segments, **ik)
     frames = markers.time.size
     q = np.empty((frames, body.n))
     residuals = np.empty((frames, len(names)))
@@ -133,21 +145,10 @@ def markers_to_recording(
     q_prev = np.asarray(posture, dtype=float)
     failed: list[str] = []
     for k in range(frames):
-        rotation[k], translation[k] = rigid_fit(lab[k, root_rows], at_root)
-        targets = lab[k] @ rotation[k].T + translation[k]
-        hierarchy.targets[: 3 * len(moving)] = targets[rows].ravel()
-        result = solver.solve(q_prev)
-        if result.residuals[0] > max_residual_m:
-            # a local minimum the last frame led into (a shoulder past a gimbal lock): tried
-            # again from the problem's posture, the better kept
-            again = solver.solve(np.asarray(posture, dtype=float))
-            result = again if again.residuals[0] < result.residuals[0] else result
+        result, residuals[k], (rotation[k], translation[k]) = fitter.frame(lab[k], q_prev)
         q[k] = q_prev = result.q
         if not result.success:
             failed.append(f"{k + 1} ({result.status})")
-        e1 = np.asarray(hierarchy.function(result.q, hierarchy.targets)[0]).reshape(-1, 3)
-        residuals[k, rows] = np.linalg.norm(e1, axis=1)
-        residuals[k, root_rows] = np.linalg.norm(targets[root_rows] - at_root, axis=1)
     if failed:
         shown = ", ".join(failed[:5]) + (f" and {len(failed) - 5} more" if len(failed) > 5 else "")
         flags.append(
@@ -163,38 +164,126 @@ def markers_to_recording(
     return recording, MarkerFit(names, residuals, rotation, translation)
 
 
-def calibrated(
-    body: BodyModel,
-    lab: np.ndarray,
-    time: np.ndarray,
-    points: Mapping[str, Sequence[str]],
-    posture: np.ndarray,
-    window_s: tuple[float, float],
-    problem: Path | None,
-) -> tuple[BodyModel, float]:
-    """``body`` with each fitted point (``points``: a landmark, or ``<segment>.<label>``)
-    placed, on the segment that carries it, at the mean of its markers over the frames of
-    ``window_s`` [s], where the subject is taken to stand in ``posture`` [rad]: there the lab
-    is fitted onto the body (Kabsch, on the mapped landmarks: the posture is known, nothing
-    trades against it), and each point carried back to the zero posture through its
-    segment's rotation; also the largest move of a landmark [m]. The markers' places on the
-    segments are then the subject's own; a posture there other than ``posture`` becomes an
-    offset of every later angle, and so do the landmarks' offsets from their markers through
-    the calibration's own fit (1.3° with 1 cm offsets in tests/test_marker_ik.py)."""
+class _Fitter:
+    """One frame's fit of ``body``'s points ``names``: the lab onto the root's points
+    (``rigid_fit``), then the IK of the others from a start, ``posture`` [rad] below, each
+    at its markers or, with ``segments``, at its markers' offset from its anchor's; a frame
+    whose residual exceeds ``max_residual_m`` [m] is solved again from ``posture``."""
+
+    def __init__(
+        self,
+        body: BodyModel,
+        names: Sequence[str],
+        posture: np.ndarray,
+        max_residual_m: float,
+        *,
+        segments: bool,
+        solver_name: str,
+        solver_spec: SolverSpec | None,
+        problem: Path | None,
+    ) -> None:
+        roots = _roots(body, names, problem)
+        moving = [n for n in names if n not in roots]
+        self.anchors = anchors(body, names, roots) if segments else {}
+        tasks = [
+            Offset(f"marker_{n}", 1, n, self.anchors[n], (0.0, 0.0, 0.0))
+            if n in self.anchors
+            else Position(f"marker_{n}", 1, n, (0.0, 0.0, 0.0))
+            for n in moving
+        ]
+        posture_task = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
+        self.hierarchy = TaskHierarchy(body, [*tasks, posture_task])
+        self.solver = cached_solver(solver_name, self.hierarchy, solver_spec)
+        self.posture = np.asarray(posture, dtype=float)
+        self.max_residual_m = max_residual_m
+        index = {n: i for i, n in enumerate(names)}
+        self.rows = [index[n] for n in moving]
+        self.anchor_rows = [index.get(self.anchors.get(n, ""), -1) for n in moving]
+        self.root_rows = [index[n] for n in roots]
+        self.at_root = np.array([body.landmarks[n].position for n in roots], dtype=float)
+
+    def frame(
+        self, lab: np.ndarray, start: np.ndarray
+    ) -> tuple[IKResult, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """The IK's answer from ``start`` [rad] for the points at ``lab`` [m] (points × 3);
+        each point's residual [m]; the rotation and translation of the lab onto the body."""
+        rotation, translation = rigid_fit(lab[self.root_rows], self.at_root)
+        at = lab @ rotation.T + translation
+        origin = np.where(np.array(self.anchor_rows)[:, None] >= 0, at[self.anchor_rows], 0.0)
+        self.hierarchy.targets[: 3 * len(self.rows)] = (at[self.rows] - origin).ravel()
+        result = self.solver.solve(start)
+        if result.residuals[0] > self.max_residual_m:
+            # a local minimum the last frame led into (a shoulder past a gimbal lock): tried
+            # again from the problem's posture, the better kept
+            again = self.solver.solve(self.posture)
+            result = again if again.residuals[0] < result.residuals[0] else result
+        residuals = np.empty(len(lab))
+        e1 = np.asarray(self.hierarchy.function(result.q, self.hierarchy.targets)[0])
+        residuals[self.rows] = np.linalg.norm(e1.reshape(-1, 3), axis=1)
+        residuals[self.root_rows] = np.linalg.norm(at[self.root_rows] - self.at_root, axis=1)
+        return result, residuals, (rotation, translation)
+
+
+def anchors(body: BodyModel, names: Sequence[str], roots: Sequence[str]) -> dict[str, str]:
+    """Each fitted point's anchor, where it has one: the fitted landmark (not a root's, not
+    a cluster marker) carried by the nearest DOF up its chain, the nearest of them at the
+    zero posture; so an elbow hangs from a shoulder, a wrist from the elbow, a hand's
+    markers from the wrist."""
+    parent = {d.name: d.parent for d in body.dofs}
+    dof = {n: body.landmarks[n].dof for n in names}  # a cluster's markers are placed by now
+    candidates = [n for n in names if "." not in n and n not in roots]
+    where = ca.Function("where", [body.q], [ca.horzcat(*[body.landmark(n) for n in names])])
+    at = dict(zip(names, np.asarray(where(np.zeros(body.n))).T, strict=True))
+    out = {}
+    for name in names:
+        up = parent.get(dof[name]) if dof[name] is not None else None
+        while up is not None:
+            on = [c for c in candidates if dof[c] == up]
+            if on:
+                out[name] = min(on, key=lambda c: float(np.linalg.norm(at[c] - at[name])))
+                break
+            up = parent.get(up)
+    return out
+
+
+def _window(time: np.ndarray, window_s: tuple[float, float], problem: Path | None) -> np.ndarray:
+    """Which frames lie in ``window_s`` ([start, end] [s]); none is a one-line error."""
     inside = (time >= window_s[0] - 1e-9) & (time <= window_s[1] + 1e-9)
     if not inside.any():
         expected = f"a window of the recording's time, {time[0]:g} to {time[-1]:g} s"
         raise ProblemError(problem, "motion.calibrate_s", list(window_s), expected)
+    return inside
+
+
+def calibrated(
+    body: BodyModel,
+    still: np.ndarray,
+    points: Mapping[str, Sequence[str]],
+    posture: np.ndarray,
+    lab_up: Sequence[float],
+    problem: Path | None,
+    window_s: tuple[float, float],
+) -> tuple[BodyModel, float]:
+    """``body`` with each fitted point (``points``: a landmark, or ``<segment>.<label>``)
+    placed, on the segment that carries it, at its markers' place ``still`` [m] (points × 3,
+    the lab, their mean over the static window ``window_s`` [s]), where the subject stands in
+    ``posture`` [rad], upright: there the lab is fitted onto the body on the mapped
+    landmarks, its axis ``lab_up`` kept vertical (``upright_fit``: the posture is known,
+    nothing trades against it), and each point carried back to the zero posture through its
+    segment's rotation; also the largest move of a
+    landmark [m]. The markers' places on the segments are then the subject's own; a posture
+    there other than ``posture`` becomes an offset of every later angle, and so do the
+    landmarks' offsets from their markers through the calibration's own fit (1.3° with 1 cm
+    offsets in tests/test_marker_ik.py)."""
     names = list(points)
-    markers = lab[inside].mean(axis=0)
     known = [n for n in names if n in body.landmarks]
     where = ca.Function("where", [body.q], [ca.horzcat(*[body.landmark(n) for n in known])])
     model = np.asarray(where(posture)).T
-    if len(known) < 3 or np.linalg.svd(model - model.mean(axis=0), compute_uv=False)[1] < 0.01:
-        expected = "at least 3 landmarks, not on one line, to place the markers by"
+    if len(known) < 2 or np.linalg.norm(np.ptp(model[:, :2], axis=0)) < 0.01:
+        expected = "at least 2 landmarks, apart horizontally, to place the markers by"
         raise ProblemError(problem, "motion.calibrate_s", list(window_s), expected)
-    rotation, translation = rigid_fit(markers[[names.index(n) for n in known]], model)
-    placed = markers @ rotation.T + translation
+    rotation, translation = upright_fit(still[[names.index(n) for n in known]], model, lab_up)
+    placed = still @ rotation.T + translation
     segments = {s.name: s.dof for s in body.segments}
     out = {n: lm for n, lm in body.landmarks.items() if n not in points}
     dofs = [
@@ -220,6 +309,25 @@ def calibrated(
         feet=body.feet,
     )
     return body, float(moved)
+
+
+def upright_fit(
+    source: np.ndarray, target: np.ndarray, up: Sequence[float]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The rotation R and translation t [m] minimising Σ‖R sᵢ + t − tᵢ‖² over the points
+    ``source`` onto ``target`` (k×3 each, k ≥ 2 apart horizontally) among the rotations
+    that take the source's axis ``up`` onto the target's z: the shortest turn of ``up``
+    onto z, then the best turn about z (Procrustes in the horizontal plane)."""
+    u = np.asarray(up, dtype=float) / np.linalg.norm(up)
+    axis, cos = np.cross(u, (0.0, 0.0, 1.0)), float(u[2])
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    tilt = np.eye(3) + k + k @ k / (1 + cos) if cos > -1 + 1e-12 else np.diag([1.0, -1.0, -1.0])
+    s = (source - source.mean(axis=0)) @ tilt.T
+    t = target - target.mean(axis=0)
+    yaw = np.arctan2(np.sum(s[:, 0] * t[:, 1] - s[:, 1] * t[:, 0]), np.sum(s[:, :2] * t[:, :2]))
+    turn = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1]])
+    r = turn @ tilt
+    return r, target.mean(axis=0) - r @ source.mean(axis=0)
 
 
 def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -555,8 +555,10 @@ class MotionSpec(Strict):
     ``markers`` maps a landmark of the body to the C3D marker labels whose mean it is (at
     least 3 landmarks); a frame whose landmark lies farther than ``max_marker_residual_m``
     [m] from its markers after the fit is flagged; ``calibrate_s`` ([start, end] [s]) the
-    frames in which the subject stands in posture_deg, where each landmark is placed on its
-    segment at its markers. ``held_s`` gives, per load name, the
+    frames in which the subject stands in posture_deg, upright along the file's ``lab_up``
+    axis, where each landmark is placed on its segment at its markers; ``fit`` "segments"
+    fits each point from its anchor (the fitted joint up its chain) instead of where it is.
+    ``held_s`` gives, per load name, the
     [start, end] windows [s] of the recording's time during which it is held (a load not
     named is held throughout)."""
 
@@ -566,6 +568,8 @@ class MotionSpec(Strict):
     markers: dict[str, Annotated[list[str], Field(min_length=1)]] = {}
     max_marker_residual_m: Annotated[float, _between(0.001, 1.0)] = 0.02
     calibrate_s: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    lab_up: Literal["x", "y", "z", "-x", "-y", "-z"] = "z"
+    fit: Literal["positions", "segments"] = "positions"
     held_s: dict[str, list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = {}
     bvh: BvhSpec = BvhSpec()
 
