@@ -349,6 +349,55 @@ def test_fitting_segments_gives_the_arm_back_when_the_shoulder_rises(
     assert worst(recording.q) < 0.5 * worst(positions.q)
 
 
+def test_a_landmark_carried_by_a_cluster_follows_it(seated: cp.Problem) -> None:
+    """Three markers around the right shoulder, rigid with it, and no marker on the
+    shoulder itself (a joint centre): placed in their frame at the calibration (frame 1,
+    the subject in posture_deg), the shoulder then goes where they take it. The shoulder,
+    cluster and arm raised 4 cm after frame 1 (an elevated girdle, which the body has not):
+    the carried shoulder is the 4 cm off the body's, and fitted as segments the arm comes
+    back to 1e-5 rad."""
+    body = seated.body
+    names = ("mid_hip", "l5s1", "hip_r", "hip_l", "c7", "vertex", "shoulder_r", "elbow_r",
+             "wrist_r", "knuckles_r")  # fmt: skip
+    q = np.vstack([seated.posture, _motion(seated, MOVED_DEG)])
+    world = _in_lab(body, names, q) @ R_LAB.T + T_LAB
+    turn = ca.Function("turn", [body.q], [body.rotation(body.landmarks["shoulder_r"].dof)])
+    around = np.array([[0.03, 0.0, 0.04], [-0.04, -0.02, 0.03], [0.0, -0.05, 0.0]])
+    cluster = np.array([world[k, 6] + around @ np.asarray(turn(qk)).T for k, qk in enumerate(q)])
+    world[1:, 6:] += (0.0, 0.0, 0.04)
+    cluster[1:] += (0.0, 0.0, 0.04)
+    labels = (*[n for n in names if n != "shoulder_r"], "AC1", "AC2", "AC3")
+    points = np.concatenate([np.delete(world, 6, axis=1), cluster], axis=1)
+    lab = (points - T_LAB) @ R_LAB
+    markers = Markers(Path("cluster.c3d"), np.arange(len(q)) / RATE_HZ, labels, lab)
+    mapping = {n: [n] for n in names if n != "shoulder_r"}
+    up = R_LAB.T @ (0.0, 0.0, 1.0)
+    args = (markers, body, mapping, seated.posture, "nullspace")
+    kwargs = {"calibration_s": (0.0, 0.0), "lab_up": up, "max_residual_m": 0.05}
+    clusters = {"shoulder_r": ["AC1", "AC2", "AC3"]}
+    recording, fit = markers_to_recording(*args, segments=True, clusters=clusters, **kwargs)
+    assert fit.landmarks[-1] == "shoulder_r"
+    np.testing.assert_allclose(fit.residuals[0, -1], 0.0, atol=1e-9)
+    assert 0.03 < fit.residuals[1:, -1].min() <= fit.residuals[1:, -1].max() < 0.04
+    distal = [body.index[d] for d in ("elbow_flexion_r", "wrist_flexion_r", "wrist_deviation_r")]
+    np.testing.assert_allclose(recording.q[:, distal], q[:, distal], atol=1e-5)
+    for wrong, match in (
+        ({"shoulder_r": ["AC1", "AC2", "AC9"]}, "AC9"),
+        ({"elbow_r": ["AC1", "AC2", "AC3"]}, "not in motion.markers"),
+        ({"shoulder_x": ["AC1", "AC2", "AC3"]}, "shoulder_x"),
+    ):
+        with pytest.raises(ProblemError, match=match):
+            markers_to_recording(*args, clusters=wrong, **kwargs)
+    with pytest.raises(ProblemError, match="calibrate_s"):
+        markers_to_recording(*args, clusters=clusters)
+    line = Markers(markers.source, markers.time, labels, lab.copy())
+    line.positions[:, -1] = 2 * line.positions[:, -2] - line.positions[:, -3]  # on AC1-AC2
+    with pytest.raises(ProblemError, match="not on one line"):
+        markers_to_recording(
+            line, body, mapping, seated.posture, "nullspace", clusters=clusters, **kwargs
+        )
+
+
 def test_a_mapping_that_does_not_fit_the_body_or_the_file_is_a_one_line_error(
     recorded: tuple,
 ) -> None:

@@ -98,6 +98,7 @@ def read_c3d_recording(
         calibration_s=None if spec.calibrate_s is None else tuple(spec.calibrate_s),
         lab_up=LAB_AXES[spec.lab_up],
         segments=spec.fit == "segments",
+        clusters=spec.clusters,
     )
 
 
@@ -115,6 +116,7 @@ def markers_to_recording(
     calibration_s: tuple[float, float] | None = None,
     lab_up: Sequence[float] = (0.0, 0.0, 1.0),
     segments: bool = False,
+    clusters: Mapping[str, Sequence[str]] | None = None,
 ) -> tuple[Recording, MarkerFit]:
     """The joint angles [rad] per frame that fit ``body``'s landmarks to the means of their
     markers (``mapping``: landmark → labels; ``problem`` names the file it came from),
@@ -123,20 +125,32 @@ def markers_to_recording(
     flagged; so are frames whose largest residual exceeds ``max_residual_m`` [m]. With
     ``calibration_s`` ([start, end] [s]: frames where the subject stands in ``posture``,
     upright along the lab's ``lab_up`` axis), each point first moves, on its segment, to
-    where its markers are then (``calibrated``). With ``segments``, a point is fitted relative
-    to its anchor (``anchors``), the segments' directions rather than their places."""
+    where its markers are then (``calibrated``); a landmark of ``clusters`` (landmark → 3 or
+    more labels), on which no marker sits, is placed in its markers' frame there and carried
+    by them (``carried``). With ``segments``, a point is fitted relative to its anchor
+    (``anchors``), the segments' directions rather than their places."""
+    clusters = dict(clusters or {})
     points = _points(markers, body, mapping, problem, calibration_s is not None)
+    carriers = _carriers(markers, body, clusters, points, problem, calibration_s is not None)
     names = tuple(points)
-    lab, notes, flags = _targets(markers, points, max_gap_s)
+    lab, notes, flags = _targets(markers, {**points, **carriers}, max_gap_s)
+    lab, on_clusters = lab[:, : len(names)], lab[:, len(names) :]
     ik = {"solver_name": solver_name, "solver_spec": solver_spec, "problem": problem}
     if calibration_s is not None:
-        still = lab[_window(markers.time, calibration_s, problem)].mean(axis=0)
-        body, moved = calibrated(body, still, points, posture, lab_up, problem, calibration_s)
+        window = _window(markers.time, calibration_s, problem)
+        still = lab[window].mean(axis=0)
+        body, moved, onto_body = calibrated(
+            body, still, points, posture, lab_up, problem, calibration_s
+        )
         notes.append(
             f"calibrated on {calibration_s[0]:g}-{calibration_s[1]:g} s, the subject taken in "
             f"posture_deg there: markers placed on their segments, landmarks moved onto "
             f"their markers by up to {moved * 1e3:.0f} mm"
         )
+        followed = carried(body, clusters, on_clusters, window, posture, onto_body)
+        if clusters:
+            lab = np.concatenate([lab, followed], axis=1)
+            names += tuple(clusters)
     fitter = _Fitter(body, names, posture, max_residual_m, segments=segments, **ik)
     frames = markers.time.size
     q = np.empty((frames, body.n))
@@ -191,8 +205,9 @@ class _Fitter:
             else Position(f"marker_{n}", 1, n, (0.0, 0.0, 0.0))
             for n in moving
         ]
-        posture_task = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
-        self.hierarchy = TaskHierarchy(body, [*tasks, posture_task])
+        lowest = JointReference("posture", 2, tuple(body.dof_names), tuple(posture))
+        self.hierarchy = TaskHierarchy(body, [*tasks, lowest])
+        self.offsets = [self.hierarchy.offset(t) for t in tasks]
         self.solver = cached_solver(solver_name, self.hierarchy, solver_spec)
         self.posture = np.asarray(posture, dtype=float)
         self.max_residual_m = max_residual_m
@@ -210,7 +225,8 @@ class _Fitter:
         rotation, translation = rigid_fit(lab[self.root_rows], self.at_root)
         at = lab @ rotation.T + translation
         origin = np.where(np.array(self.anchor_rows)[:, None] >= 0, at[self.anchor_rows], 0.0)
-        self.hierarchy.targets[: 3 * len(self.rows)] = (at[self.rows] - origin).ravel()
+        for offset, target in zip(self.offsets, at[self.rows] - origin, strict=True):
+            self.hierarchy.targets[offset : offset + 3] = target
         result = self.solver.solve(start)
         if result.residuals[0] > self.max_residual_m:
             # a local minimum the last frame led into (a shoulder past a gimbal lock): tried
@@ -263,15 +279,16 @@ def calibrated(
     lab_up: Sequence[float],
     problem: Path | None,
     window_s: tuple[float, float],
-) -> tuple[BodyModel, float]:
+) -> tuple[BodyModel, float, tuple[np.ndarray, np.ndarray]]:
     """``body`` with each fitted point (``points``: a landmark, or ``<segment>.<label>``)
-    placed, on the segment that carries it, at its markers' place ``still`` [m] (points × 3,
-    the lab, their mean over the static window ``window_s`` [s]), where the subject stands in
-    ``posture`` [rad], upright: there the lab is fitted onto the body on the mapped
-    landmarks, its axis ``lab_up`` kept vertical (``upright_fit``: the posture is known,
-    nothing trades against it), and each point carried back to the zero posture through its
-    segment's rotation; also the largest move of a
-    landmark [m]. The markers' places on the segments are then the subject's own; a posture
+    placed, on the segment that carries it, at its markers'
+    place ``still`` [m] (points × 3, the lab, their mean over the static window ``window_s``
+    [s]), where the subject stands in ``posture`` [rad], upright: there the lab is fitted
+    onto the body on the mapped landmarks, its axis ``lab_up`` kept vertical
+    (``upright_fit``: the posture is known, nothing trades against it), and each point
+    carried back to the zero posture through its segment's rotation; also the largest move
+    of a landmark [m] and that fit (the lab onto the body: rotation, translation [m],
+    x = R m + t). The markers' places on the segments are then the subject's own; a posture
     there other than ``posture`` becomes an offset of every later angle, and so do the
     landmarks' offsets from their markers through the calibration's own fit (1.3° with 1 cm
     offsets in tests/test_marker_ik.py)."""
@@ -308,7 +325,39 @@ def calibrated(
         gravity=body.gravity,
         feet=body.feet,
     )
-    return body, float(moved)
+    return body, float(moved), (rotation, translation)
+
+
+def carried(
+    body: BodyModel,
+    clusters: Mapping[str, Sequence[str]],
+    lab: np.ndarray,
+    window: np.ndarray,
+    posture: np.ndarray,
+    onto_body: tuple[np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """Where each landmark of ``clusters`` (landmark → labels) is in the lab in each frame [m]
+    (frames, landmarks, 3), carried by its markers as a rigid body (Cappozzo's cluster
+    technique): in the calibration's frames ``window`` the landmark is where ``body`` has it
+    at ``posture`` [rad], brought into the lab by the inverse of ``onto_body`` (the lab onto
+    the body: R, t); in each frame, the markers' rigid move (``rigid_fit``) from their mean
+    there carries it. ``lab`` [m] (frames, markers, 3) holds the clusters' markers in order."""
+    out = np.empty((lab.shape[0], len(clusters), 3))
+    if not clusters:
+        return out
+    rotation, translation = onto_body
+    where = ca.Function("where", [body.q], [ca.horzcat(*[body.landmark(n) for n in clusters])])
+    at_posture = np.asarray(where(posture)).T
+    first = 0
+    for j, labels in enumerate(clusters.values()):
+        markers = lab[:, first : first + len(labels)]
+        first += len(labels)
+        still = markers[window].mean(axis=0)
+        placed = (at_posture[j] - translation) @ rotation  # Rᵀ (x − t)
+        for k, frame in enumerate(markers):
+            r, t = rigid_fit(still, frame)
+            out[k, j] = r @ placed + t
+    return out
 
 
 def upright_fit(
@@ -377,6 +426,44 @@ def _points(
         else:
             points.update({f"{name}.{label}": [label] for label in labels})
     return points
+
+
+def _carriers(
+    markers: Markers,
+    body: BodyModel,
+    clusters: Mapping[str, Sequence[str]],
+    points: Mapping[str, Sequence[str]],
+    problem: Path | None,
+    calibrating: bool,
+) -> dict[str, list[str]]:
+    """Each marker of ``clusters`` (landmark → labels) as a point of its own, for its gaps
+    to be filled; a cluster without a calibration, on a landmark the body has not or one
+    mapped already, with a label not in the file, or with fewer than 3 markers not on one
+    line in the first frame they are all seen, is a one-line error."""
+    out: dict[str, list[str]] = {}
+    for name, labels in clusters.items():
+        key = f"motion.clusters.{name}"
+        if not calibrating:
+            expected = "motion.calibrate_s too: a cluster's landmark is placed there"
+            raise ProblemError(problem, key, name, expected)
+        if name not in body.landmarks or name in points:
+            close = closest(name, list(body.landmarks))
+            expected = f"a landmark of the body not in motion.markers: {close}"
+            raise ProblemError(problem, key, name, expected)
+        for label in labels:
+            if label not in markers.labels:
+                close = closest(label, list(markers.labels))
+                expected = f"a marker label of {markers.source} ({close})"
+                raise ProblemError(problem, key, label, expected)
+        xyz = np.stack([markers.marker(label) for label in labels], axis=1)
+        seen = np.flatnonzero(np.isfinite(xyz).all(axis=(1, 2)))
+        first = xyz[seen[0]] if seen.size else np.zeros((len(labels), 3))
+        spread = np.linalg.svd(first - first.mean(axis=0), compute_uv=False)
+        if spread[1] < ROOT_SPREAD_M * np.sqrt(len(labels)):
+            expected = "3 or more markers, not on one line, seen together in one frame at least"
+            raise ProblemError(problem, key, list(labels), expected)
+        out.update({f"{name}:{label}": [label] for label in labels})
+    return out
 
 
 def _roots(body: BodyModel, names: Sequence[str], problem: Path | None) -> list[str]:

@@ -557,7 +557,9 @@ class MotionSpec(Strict):
     [m] from its markers after the fit is flagged; ``calibrate_s`` ([start, end] [s]) the
     frames in which the subject stands in posture_deg, upright along the file's ``lab_up``
     axis, where each landmark is placed on its segment at its markers; ``fit`` "segments"
-    fits each point from its anchor (the fitted joint up its chain) instead of where it is.
+    fits each point from its anchor (the fitted joint up its chain) instead of where it is;
+    ``clusters`` maps a landmark no marker sits on (a shoulder's centre) to 3 or more markers
+    rigid with it, which carry it from where the calibration places it.
     ``held_s`` gives, per load name, the
     [start, end] windows [s] of the recording's time during which it is held (a load not
     named is held throughout)."""
@@ -570,6 +572,7 @@ class MotionSpec(Strict):
     calibrate_s: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
     lab_up: Literal["x", "y", "z", "-x", "-y", "-z"] = "z"
     fit: Literal["positions", "segments"] = "positions"
+    clusters: dict[str, Annotated[list[str], Field(min_length=3)]] = {}
     held_s: dict[str, list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = {}
     bvh: BvhSpec = BvhSpec()
 
