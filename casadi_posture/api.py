@@ -30,7 +30,7 @@ from casadi_posture.ik.solvers import check_solver
 from casadi_posture.motion.angles import read_angles
 from casadi_posture.motion.bvh import read_bvh
 from casadi_posture.motion.marker_ik import read_c3d_recording
-from casadi_posture.motion.recording import Recording, held_frames, repeat, resample
+from casadi_posture.motion.recording import Recording, between, held_frames, repeat, resample
 from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
@@ -209,6 +209,7 @@ def read_motion(
     motion: str | Path,
     *,
     solver: str | None = None,
+    between_s: tuple[float, float] | None = None,
     resample_s: float | None = None,
     repeat_times: int | None = None,
     until_s: float | None = None,
@@ -217,7 +218,8 @@ def read_motion(
     joint angles [deg] with a time column [s]; a C3D file of markers or a BVH file of joint
     rotations, turned into joint angles by the IK ``solver`` (default: the file's) with the
     problem's ``[motion.markers]`` or ``[motion.bvh]``; each load held in its
-    ``motion.held_s`` windows; resampled every ``resample_s`` [s] if given, then played
+    ``motion.held_s`` windows; cut to the frames ``between_s`` ([start, end] [s], the file's
+    time) if given, resampled every ``resample_s`` [s] if given, then played
     ``repeat_times`` times or until ``until_s`` [s] as a work cycle."""
     path, spec = Path(motion), problem.spec.motion
     check_solver(solver, problem.path)
@@ -237,12 +239,15 @@ def read_motion(
     held = held_frames(recording.time, spec.held_s, names, problem.path)
     options = {
         "solver": solver,
+        "between_s": None if between_s is None else list(between_s),
         "resample_s": resample_s,
         "repeat_times": repeat_times,
         "until_s": until_s,
     }
     sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
     recording = replace(recording, held=held, read_with={"sha256": sha256, **options})
+    if between_s is not None:
+        recording = between(recording, *between_s)
     if resample_s is not None:
         recording = resample(recording, resample_s)
     if repeat_times is not None or until_s is not None:
@@ -255,6 +260,7 @@ def evaluate(
     motion: str | Path | Recording,
     *,
     solver: str | None = None,
+    between_s: tuple[float, float] | None = None,
     resample_s: float | None = None,
     repeat_times: int | None = None,
     until_s: float | None = None,
@@ -272,6 +278,7 @@ def evaluate(
             problem,
             motion,
             solver=solver,
+            between_s=between_s,
             resample_s=resample_s,
             repeat_times=repeat_times,
             until_s=until_s,

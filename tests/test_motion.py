@@ -14,7 +14,7 @@ from click.testing import CliRunner
 import casadi_posture as cp
 from casadi_posture.cli import main
 from casadi_posture.errors import ProblemError
-from casadi_posture.motion.recording import Recording, fill_gaps, repeat, resample
+from casadi_posture.motion.recording import Recording, between, fill_gaps, repeat, resample
 
 ARM = "problems/holding_horizontal.toml"
 STANDING = "problems/standing_wall_horizontal.toml"
@@ -91,6 +91,25 @@ def test_resample_and_repeat() -> None:
     assert until.time[-1] <= 6.0 < until.time[-1] + 1.0 and "repeated" in until.notes[-1]
     with pytest.raises(ProblemError, match="--resample"):
         resample(recording, 10.0)
+
+
+def test_between_keeps_one_phase_with_its_loads_and_residuals() -> None:
+    """The frames in the window, by the file's time, with their held loads and fit
+    residuals; a window with fewer than 2 frames, or backwards, is a one-line error."""
+    time = np.arange(6) * 0.5
+    q = np.column_stack([time, -time])
+    held = np.array([[0], [1], [1], [1], [0], [0]])
+    fit = {"elbow_r": time * 1e-3}
+    recording = Recording(Path("m.c3d"), "c3d", time, q, held=held, residuals=fit)
+    phase = between(recording, 0.5, 1.5)
+    np.testing.assert_array_equal(phase.time, [0.5, 1.0, 1.5])
+    np.testing.assert_array_equal(phase.q[:, 1], [-0.5, -1.0, -1.5])
+    np.testing.assert_array_equal(phase.held[:, 0], [1, 1, 1])
+    np.testing.assert_array_equal(phase.residuals["elbow_r"], [5e-4, 1e-3, 1.5e-3])
+    assert "3 of 6" in phase.notes[-1]
+    for start, end in ((1.1, 1.4), (2.0, 1.0), (math.nan, 1.0)):
+        with pytest.raises(ProblemError, match="--between"):
+            between(recording, start, end)
 
 
 def test_a_recording_s_loads_are_its_own(tmp_path: Path) -> None:
@@ -280,15 +299,16 @@ def test_a_problem_without_tasks_evaluates_and_draws(tmp_path: Path) -> None:
 
 
 def test_rerun_repeats_an_evaluation_and_refuses_a_changed_recording(tmp_path: Path) -> None:
-    """rerun on evaluate's manifest reads the same recording the same way (--repeat here)
+    """rerun on evaluate's manifest reads the same recording the same way (--between and
+    --repeat here: 5 frames twice)
     and gives summary.json byte for byte; a recording changed since is a one-line error."""
     path = _arm_csv(tmp_path / "m.csv", [90.0] * 10, [0.0] * 10)
     out = tmp_path / "out"
     command = ["evaluate", ARM, "--motion", str(path), "--repeat", "2", "--out", str(out)]
-    assert CliRunner().invoke(main, command).exit_code == 0
+    assert CliRunner().invoke(main, [*command, "--between", "2", "6"]).exit_code == 0
     again = CliRunner().invoke(main, ["rerun", str(out / "manifest.json")])
     assert again.exit_code == 0, again.output
-    assert "summary.json identical to" in again.output and "20 frames" in again.output
+    assert "summary.json identical to" in again.output and "10 frames" in again.output
     _arm_csv(path, [80.0] * 10, [0.0] * 10)
     changed = CliRunner().invoke(
         main, ["rerun", str(out / "manifest.json"), "--out", str(tmp_path / "r2")]

@@ -44,6 +44,15 @@ from casadi_posture.static import law
 )
 @SOLVER_OPTION
 @click.option(
+    "--between",
+    "between_s",
+    type=(float, float),
+    default=None,
+    metavar="START END",
+    help="Only the frames from START to END s of the recording (the file's time; a static "
+    "calibration window may lie outside) [default: all of them].",
+)
+@click.option(
     "--resample",
     "resample_s",
     type=float,
@@ -87,6 +96,7 @@ def evaluate(
     problem: str,
     motion: Path,
     solver: str | None,
+    between_s: tuple[float, float] | None,
     resample_s: float | None,
     repeat_times: int | None,
     until_s: float | None,
@@ -125,6 +135,7 @@ def evaluate(
             resolved,
             motion,
             solver=solver,
+            between_s=between_s,
             resample_s=resample_s,
             repeat_times=repeat_times,
             until_s=until_s,

@@ -172,8 +172,10 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
         if recording is None:
             run = api.simulate(resolved, record["solver"])
         else:
-            options = ("solver", "resample_s", "repeat_times", "until_s")
+            options = ("solver", "between_s", "resample_s", "repeat_times", "until_s")
             read_with = {k: recording.get(k) for k in options}
+            if read_with["between_s"] is not None:
+                read_with["between_s"] = tuple(read_with["between_s"])
             run = api.evaluate(resolved, _recording(path, recording), **read_with)
         files = write_run(run, out, command_line())
     report = _report if recording is None else report_recording

@@ -78,6 +78,29 @@ def check_times(time: np.ndarray, source: Path, column: str) -> None:
         raise ProblemError(source, column, float(time[-1] - time[0]), expected)
 
 
+def between(recording: Recording, start_s: float, end_s: float) -> Recording:
+    """The frames of ``recording`` from ``start_s`` to ``end_s`` [s] (the file's time), at
+    least two: one phase of a longer recording."""
+    key, window = "--between", [start_s, end_s]
+    if not (math.isfinite(start_s) and math.isfinite(end_s) and start_s < end_s):
+        raise ProblemError(None, key, window, "a start and a later end in s")
+    inside = (recording.time >= start_s - 1e-9) & (recording.time <= end_s + 1e-9)
+    if inside.sum() < 2:
+        first, last = recording.time[0], recording.time[-1]
+        expected = f"a window with 2 frames or more of the recording's {first:g} to {last:g} s"
+        raise ProblemError(None, key, window, expected)
+    held = None if recording.held is None else recording.held[inside]
+    note = f"the frames from {start_s:g} to {end_s:g} s: {int(inside.sum())} of {recording.frames}"
+    return replace(
+        recording,
+        time=recording.time[inside],
+        q=recording.q[inside],
+        held=held,
+        residuals=_each(recording.residuals, lambda r: r[inside]),
+        notes=(*recording.notes, note),
+    )
+
+
 def resample(recording: Recording, step_s: float) -> Recording:
     """The recording at every ``step_s`` [s] from its first frame to its last, each DOF
     interpolated linearly between the frames around it."""
