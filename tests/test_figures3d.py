@@ -22,6 +22,7 @@ from casadi_posture.output.figures3d import postures_3d_figure
 from casadi_posture.output.key_postures import key_postures
 from casadi_posture.output.plots import REGION_MIN_FATIGUE, fatigue_regions_figure
 from casadi_posture.output.skeleton import Skeleton
+from casadi_posture.output.time_axis import time_unit
 
 HUMANOID = Path(__file__).resolve().parents[1] / "benchmarks" / "problems" / "humanoid_28.toml"
 ARM = PROBLEMS / "holding_m45.toml"
@@ -108,7 +109,7 @@ def test_the_region_figure_has_one_panel_per_tired_region(arm: cp.api.Simulation
     assert len(panels) == len(fig.axes) == len(tired) == 2
     assert panels[0].get_label() == "shoulder"  # the shoulder flexors tire first
     for ax in panels:
-        assert ax.get_xlabel() in ("", "time (min)")
+        assert ax.get_xlabel() in ("", "time (s)")  # a run of 5 minutes: in seconds
         curves = [line for line in ax.lines if np.ptp(line.get_ydata()) > 0]
         assert curves and max(np.max(c.get_ydata()) for c in curves) > REGION_MIN_FATIGUE
     plt.close(fig)
@@ -267,7 +268,7 @@ def test_the_figure_draws_a_person_its_task_limb_deeper_and_a_large_3d_view(
     result = wall.result
     fig = postures_3d_figure(result)
     views = {ax.get_label(): ax for ax in fig.axes}
-    postures = len(key_postures(result, unit="min"))
+    postures = len(key_postures(result))
     assert postures >= 2
     body = result.problem.body
     eyes = np.asarray(ca.Function("e", [body.q], [body.landmark("eyes")])(result.timeline.q[0]))
@@ -320,3 +321,10 @@ def test_the_animation_recolours_the_mannequin(wall: cp.api.Simulation) -> None:
         np.testing.assert_allclose(torso.get_edgecolor(), to_rgba(colour))
         assert torso.get_facecolor()[3] == 1.0
     plt.close(frames.fig)
+
+
+def test_figures_give_time_in_minutes_only_past_five_minutes() -> None:
+    """A recorded cycle of seconds reads in seconds; the report's rule (over 300 s: min)."""
+    assert time_unit(np.array([0.0, 5.78])) == (1.0, "s")
+    assert time_unit(np.array([0.0, 300.0])) == (1.0, "s")
+    assert time_unit(np.array([10.0, 311.0])) == (60.0, "min")

@@ -20,6 +20,7 @@ from casadi_posture import interrupt
 from casadi_posture.errors import ProblemError
 from casadi_posture.output.key_postures import title
 from casadi_posture.output.scene import VIEWS, Pose, Scene, add_3d_view
+from casadi_posture.output.time_axis import in_unit, time_unit
 from casadi_posture.simulation import SimulationResult
 
 #: Animation formats and the matplotlib writer of each.
@@ -73,18 +74,18 @@ def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
     """Fatigue [0–1] over time [min] of the groups that owned the constraint (or of the
     most tired one), both thresholds, the constraint shaded; returns the time cursor."""
     tl, s = result.timeline, result.settings
-    minutes = tl.time / 60
+    times, unit = in_unit(tl.time)
     owners = list(dict.fromkeys(int(k) for k in tl.owner if k >= 0))
     groups = owners or [int(np.argmax(tl.fatigue.max(axis=0)))]
     halves = result.problem.body.half_joints
     for k in groups[:4]:
-        ax.plot(minutes, tl.fatigue[:, k], lw=1.4, label=halves[k].name)
+        ax.plot(times, tl.fatigue[:, k], lw=1.4, label=halves[k].name)
     ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=0.8)
     ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=0.8)
     on = tl.owner >= 0
     if on.any():
         ax.fill_between(
-            minutes,
+            times,
             0,
             STRIP_TOP,
             where=on,
@@ -93,20 +94,27 @@ def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
             zorder=0,
             label="constraint on",
         )
-    ax.set_xlim(minutes[0], max(minutes[-1], minutes[0] + 1e-3))
+    ax.set_xlim(times[0], max(times[-1], times[0] + 1e-3))
     ax.set_ylim(0, STRIP_TOP)  # the legend sits above the curves (fatigue ≤ 1)
     ax.set_yticks([0.0, 0.5, 1.0])
-    ax.set_xlabel("time (min)", fontsize=8)
+    ax.set_xlabel(f"time ({unit})", fontsize=8)
     ax.set_ylabel("fatigue", fontsize=8)
     ax.tick_params(labelsize=7)
     ax.legend(fontsize=7, loc="upper left", ncol=min(len(groups) + 1, 5), frameon=False)
-    return ax.axvline(minutes[0], color="black", lw=1.2)
+    return ax.axvline(times[0], color="black", lw=1.2)
 
 
 def _state(result: SimulationResult, step: int) -> str:
-    """The time [min] and the constraint's state at ``step`` in words."""
+    """The time (min and s, or s for a run of 5 min or less) and the constraint's state at
+    ``step`` in words."""
     tl = result.timeline
-    text = f"t = {tl.time[step] / 60:.1f} min ({tl.time[step]:g} s)   constraint: "
+    _, unit = time_unit(tl.time)
+    when = (
+        f"{tl.time[step] / 60:.1f} min ({tl.time[step]:g} s)"
+        if unit == "min"
+        else f"{tl.time[step]:g} s"
+    )
+    text = f"t = {when}   constraint: "
     owner = int(tl.owner[step])
     if owner < 0:
         return text + "off"
@@ -164,7 +172,7 @@ class _Frames:
         for pose in self.poses:
             pose.recolour(colour)
             pose.update(step)
-        self.cursor.set_xdata([tl.time[step] / 60] * 2)
+        self.cursor.set_xdata([tl.time[step] / time_unit(tl.time)[0]] * 2)
         self.state.set_text(_state(self.result, step))
         self.state.set_color(colour)
 

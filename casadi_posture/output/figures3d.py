@@ -63,7 +63,7 @@ def postures_3d_figure(result: SimulationResult) -> Figure:
     translucent in outlines of their colour), each posture's centre of mass and its
     projection on the floor, the support polygon, the tasks' targets and the loads. The
     views are the axes labelled sagittal, frontal, top and 3-D."""
-    shown = key_postures(result, unit="min")
+    shown = key_postures(result)
     scene = Scene.of_run(result, [step for step, _, _ in shown])
     dx, dy, dz = scene.spans
     wide = max(dx + dy, dz)  # the 3-D view's column [m]: its axes are square

@@ -41,6 +41,7 @@ from casadi_posture.output.scene import Scene
 from casadi_posture.output.scores import run_lines as score_lines
 from casadi_posture.output.scores import step_scores
 from casadi_posture.output.scores import timeline_columns as score_columns
+from casadi_posture.output.time_axis import time_unit
 from casadi_posture.simulation import SimulationResult
 
 #: Most moments the slider shows (every event's moment is added to them), most points of
@@ -255,9 +256,14 @@ def summary_html(report: dict[str, Any]) -> str:
     return f"<ul>{items}</ul>{verdict}"
 
 
+#: Fitted points drawn in a recording's fit panel, the worst first (timeline.csv has all).
+DRAWN_FIT_POINTS = 6
+
+
 def _fit_residuals(result: SimulationResult) -> tuple[str, dict[str, np.ndarray]] | None:
     """A recording's IK fit per frame, for the panel a run's task residuals take: its title
-    and each fitted point's residual (C3D: mm; BVH: deg); None for any other run."""
+    and each fitted point's residual (C3D: mm; BVH: deg), the ``DRAWN_FIT_POINTS`` with
+    the largest; None for any other run."""
     recording = result.recording
     if recording is None or not recording.residuals:
         return None
@@ -267,19 +273,18 @@ def _fit_residuals(result: SimulationResult) -> tuple[str, dict[str, np.ndarray]
     if unit == "m":  # markers, shown in mm
         what, unit, scale = "markers", "mm", 1e3 * scale
     values = {k: scale * v[:size] for k, v in recording.residuals.items()}
+    if len(values) > DRAWN_FIT_POINTS:  # the worst, so that the legend fits its panel
+        worst = sorted(values, key=lambda k: -float(np.max(values[k])))[:DRAWN_FIT_POINTS]
+        title = f"fit to the {what} ({unit}), the {DRAWN_FIT_POINTS} worst of {len(values)}"
+        return title, {k: values[k] for k in values if k in worst}
     return f"fit to the {what} ({unit})", values
-
-
-def _when(seconds: float) -> tuple[float, str]:
-    """The curves' time unit for a run of ``seconds``: s per unit and its name."""
-    return (60.0, "min") if seconds > 300 else (1.0, "s")
 
 
 def report_html(result: SimulationResult) -> str:
     """The page of a run that ran at least one step."""
     tl = result.timeline
     report = summary(result)
-    scale, unit = _when(float(tl.time[-1]))
+    scale, unit = time_unit(tl.time)
     frames = frame_steps(tl.time, [e.time_s for e in result.events])
     scene = Scene.of_run(result, frames.tolist())
     body, moves = body_figure(scene, frames)

@@ -8,6 +8,7 @@ import textwrap
 import matplotlib
 import numpy as np
 
+from casadi_posture.output.time_axis import time_unit
 from casadi_posture.simulation import SimulationResult
 
 #: Recovery postures drawn in the posture figures (summary.json lists them all).
@@ -44,11 +45,13 @@ def recoveries(result: SimulationResult) -> list[int]:
     ]
 
 
-def key_postures(result: SimulationResult, unit: str = "s") -> list[Shown]:
-    """The initial posture (black), the first few recovery postures (viridis) and the last
-    (red), times in ``unit`` (s or min); postures within 0.5° of an earlier one merged
-    into it (a cycle that recovers where it recovered before)."""
+def key_postures(result: SimulationResult) -> list[Shown]:
+    """The initial posture (black), the first few recovery postures (viridis), on a recorded
+    motion the one of the largest load (purple), and the last (red), times in the run's
+    unit (``time_unit``); postures within 0.5° of an earlier one merged into it (a cycle
+    that recovers where it recovered before)."""
     tl = result.timeline
+    _, unit = time_unit(tl.time)
 
     def when(step: int) -> str:
         return f"{tl.time[step] / 60:.1f} min" if unit == "min" else f"{tl.time[step]:g} s"
@@ -62,6 +65,11 @@ def key_postures(result: SimulationResult, unit: str = "s") -> list[Shown]:
     if len(steps) > DRAWN_RECOVERIES:
         step, label, colour = shown[-1]
         shown[-1] = (step, f"{label} (+{len(steps) - DRAWN_RECOVERIES} more)", colour)
+    if result.recording is not None and np.isfinite(tl.load).any():
+        step, group = np.unravel_index(np.nanargmax(tl.load), tl.load.shape)
+        name = result.problem.body.half_joints[group].name
+        label = f"largest load at {when(step)}: {name}, {tl.load[step, group]:.0f} %MVC"
+        shown.append((int(step), label, "tab:purple"))
     last = tl.time.size - 1
     shown.append((last, f"end ({when(last)})", "tab:red"))
     return _merge_repeats(shown, tl.q)

@@ -24,6 +24,7 @@ from casadi_posture.output.saving import save_figure
 from casadi_posture.output.schedule_plots import plot_schedule
 from casadi_posture.output.score_plots import plot_scores
 from casadi_posture.output.skeleton import Skeleton
+from casadi_posture.output.time_axis import in_unit, time_unit
 from casadi_posture.simulation import SimulationResult
 
 
@@ -78,11 +79,12 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     colours = matplotlib.colormaps["tab10"].colors
     groups = list(dict.fromkeys(data_name(halves[k].name) for k in drawn))
     same = []
+    scale, unit = time_unit(tl.time)
     for k in drawn:
         name = halves[k].name
         left = name.endswith("_l")
         ax.plot(
-            tl.time / 60,
+            tl.time / scale,
             tl.fatigue[:, k],
             lw=1.4 if left else 2.0,
             ls="--" if left else "-",
@@ -96,7 +98,7 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     over = [e for e in result.events if e.kind == "over_strength"]
     if over:
         ax.plot(
-            [e.time_s / 60 for e in over],
+            [e.time_s / scale for e in over],
             [1.0] * len(over),
             "x",
             color="tab:red",
@@ -109,10 +111,10 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     active = tl.owner >= 0
     if active.any():
         ax.fill_between(
-            tl.time / 60, 0, 1.05, where=active, color="0.85", step="post", label="constraint on"
+            tl.time / scale, 0, 1.05, where=active, color="0.85", step="post", label="constraint on"
         )
     ax.set_ylim(0, 1.05)
-    ax.set_xlabel("time (min)")
+    ax.set_xlabel(f"time ({unit})")
     ax.set_ylabel("fatigue level")
     ax.set_title(title(result))
     below = sum(1 for k in range(len(halves)) if 0 < peak[k] < DRAWN_MIN_FATIGUE)
@@ -143,17 +145,18 @@ def _regions(result: SimulationResult) -> dict[str, list[int]]:
 
 
 def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
-    """Fatigue over time [min], one panel (labelled with its region) per body region that
-    has a group above 1 % fatigue (at least the most tired region's), the region that
+    """Fatigue over time (min, or s for a run of 5 min or less), one panel (labelled with its
+    region) per body region that has a group above 1 % fatigue (at least the most tired
+    region's), the region that
     reached the fatigue threshold first on top, then by largest fatigue; both thresholds,
     when a group of the region owned the constraint, and where each group first reached
     the fatigue threshold."""
     tl, s = result.timeline, result.settings
     halves = result.problem.body.half_joints
-    minutes = tl.time / 60
+    times, unit = in_unit(tl.time)
     peak = tl.fatigue.max(axis=0)
     reached = tl.fatigue >= s.fatigue_threshold
-    first = np.where(reached.any(axis=0), minutes[np.argmax(reached, axis=0)], np.inf)
+    first = np.where(reached.any(axis=0), times[np.argmax(reached, axis=0)], np.inf)
     regions = _regions(result)
     tired = {r: ks for r, ks in regions.items() if peak[ks].max() > REGION_MIN_FATIGUE}
     if not tired:
@@ -168,17 +171,18 @@ def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
         groups = [k for k in tired[region] if peak[k] > REGION_MIN_FATIGUE]
         groups = groups or [max(tired[region], key=lambda k: peak[k])]
         for k in groups:
-            (line,) = ax.plot(minutes, tl.fatigue[:, k], lw=1.6, label=halves[k].name)
+            (line,) = ax.plot(times, tl.fatigue[:, k], lw=1.6, label=halves[k].name)
             if np.isfinite(first[k]):
                 ax.plot(first[k], s.fatigue_threshold, "o", ms=5, color=line.get_color())
         ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=1)
         ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=1)
         owned = np.isin(tl.owner, tired[region])
         if owned.any():
-            ax.fill_between(minutes, 0, 1.05, where=owned, color="0.88", step="post", zorder=0)
+            ax.fill_between(times, 0, 1.05, where=owned, color="0.88", step="post", zorder=0)
         earliest = min(tired[region], key=lambda k: (first[k], -peak[k]))
         if np.isfinite(first[earliest]):
-            note = f"first at the threshold {halves[earliest].name}, {first[earliest]:.1f} min"
+            when = f"{first[earliest]:.1f} min" if unit == "min" else f"{first[earliest]:g} s"
+            note = f"first at the threshold {halves[earliest].name}, {when}"
         else:
             note = f"largest fatigue {peak[earliest]:.2f} ({halves[earliest].name})"
         ax.set_title(f"{region} — {note}", fontsize=9, loc="left")
@@ -189,7 +193,7 @@ def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
         ax.grid(alpha=0.3)
         columns = 1 + len(groups) // 7
         ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), ncol=columns)
-    axes[-1, 0].set_xlabel("time (min)", fontsize=8)
+    axes[-1, 0].set_xlabel(f"time ({unit})", fontsize=8)
     shared = [
         Line2D([], [], color="tab:red", ls="--", lw=1, label="fatigue threshold"),
         Line2D([], [], color="tab:green", ls="--", lw=1, label="recovery threshold"),
@@ -248,11 +252,12 @@ def _draw_tasks(ax: plt.Axes, result: SimulationResult, skeleton: Skeleton) -> N
 def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
     """Shade the intervals the fatigue constraint was on; mark each recovery."""
     tl = result.timeline
+    scale, _ = time_unit(tl.time)
     on = tl.owner >= 0
     if on.any():
         low, high = ax.get_ylim()
         ax.fill_between(
-            tl.time / 60,
+            tl.time / scale,
             low,
             high,
             where=on,
@@ -264,7 +269,7 @@ def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
         ax.set_ylim(low, high)
     for k, step in enumerate(recoveries(result)):
         ax.axvline(
-            tl.time[step] / 60,
+            tl.time[step] / scale,
             color="tab:green",
             lw=1,
             ls="--",
@@ -314,13 +319,13 @@ def plot_effector(result: SimulationResult, path: Path) -> Path:
     line = next((t for t in ordered if isinstance(t, Line)), None)
     top = next((t for t in ordered if isinstance(t, Position | Plane)), None)
     fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
-    minutes = tl.time / 60
+    times, unit = in_unit(tl.time)
     if line is not None and tl.along_line is not None:
-        ax.plot(minutes, tl.along_line, color="tab:blue", lw=1.8)
+        ax.plot(times, tl.along_line, color="tab:blue", lw=1.8)
         ax.set_ylabel(f"{line.effector} along the line (m)")
         _at_least(ax, 1e-3)
     elif isinstance(top, Position | Plane):
-        ax.plot(minutes, tl.residuals[:, _level(result, top)], color="tab:blue", lw=1.8)
+        ax.plot(times, tl.residuals[:, _level(result, top)], color="tab:blue", lw=1.8)
         kind = "target" if isinstance(top, Position) else "plane"
         ax.set_ylabel(f"{top.effector} to the {kind} (m)")
         _at_least(ax, 1e-3)
@@ -329,12 +334,12 @@ def plot_effector(result: SimulationResult, path: Path) -> Path:
         motion = np.degrees(np.ptp(tl.q, axis=0))
         moving = np.argsort(-motion, kind="stable")[:DRAWN_ANGLES]
         for i in sorted(moving):
-            ax.plot(minutes, np.degrees(tl.q[:, i]), lw=1.8, label=dofs[i].name)
+            ax.plot(times, np.degrees(tl.q[:, i]), lw=1.8, label=dofs[i].name)
         most = f", the {DRAWN_ANGLES} that move most" if len(dofs) > DRAWN_ANGLES else ""
         ax.set_ylabel(f"joint angle (deg){most}")
         if motion.max() < STILL_DEG:
             _say(ax, f"no joint moved more than {STILL_DEG:g}° during the run")
-    ax.set_xlabel("time (min)")
+    ax.set_xlabel(f"time ({unit})")
     ax.set_title(title(result))
     ax.grid(alpha=0.3)
     _mark_cycles(ax, result)

@@ -218,8 +218,10 @@ class Scene:
             limbs = ", ".join(sorted(self.task_limbs, reverse=True))
             label = f"deeper shade: task limb{'s' * (len(self.task_limbs) > 1)} ({limbs})"
             handles.append(Patch(fc=tint("black", TASK_WHITE), ec="black", label=label))
-        if any(part.context for part in self.skeleton.parts):
-            label = "grey: legs and stool, not modelled (context)"
+        context = {part.name for part in self.skeleton.parts if part.context}
+        if context:
+            drawn = "legs and stool" if "seat" in context else "legs"
+            label = f"grey: {drawn}, not modelled (context)"
             handles.append(Patch(fc=CONTEXT[0], ec=CONTEXT[1], label=label))
         handles.append(
             Line2D([], [], ls="", marker="o", ms=8, mfc="white", mec="0.2", mew=1.8,

@@ -11,6 +11,7 @@ import numpy as np
 
 from casadi_posture.output.key_postures import title
 from casadi_posture.output.saving import save_figure
+from casadi_posture.output.time_axis import time_unit
 from casadi_posture.simulation import SimulationResult
 
 #: Colour of the shaded rest periods.
@@ -30,18 +31,20 @@ def rest_spans(result: SimulationResult) -> list[tuple[float, float]]:
     return [(tl.time[a] - dt, tl.time[b - 1]) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-def _fatigue_panel(ax: plt.Axes, result: SimulationResult, heading: str) -> None:
-    """The most tired groups' fatigue [min on x], both thresholds, rest periods shaded."""
+def _fatigue_panel(ax: plt.Axes, result: SimulationResult, heading: str) -> str:
+    """The most tired groups' fatigue over time (``time_unit``'s unit, which it returns),
+    both thresholds, rest periods shaded."""
     tl, s = result.timeline, result.settings
     halves = result.problem.body.half_joints
-    minutes = tl.time / 60
+    scale, unit = time_unit(tl.time)
+    times = tl.time / scale
     spans = rest_spans(result)
     for start, end in spans:
-        ax.axvspan(start / 60, end / 60, color=REST_COLOUR, lw=0, zorder=0)
+        ax.axvspan(start / scale, end / scale, color=REST_COLOUR, lw=0, zorder=0)
     peak = tl.fatigue.max(axis=0) if tl.time.size else np.zeros(len(halves))
     drawn = [k for k in np.argsort(-peak, kind="stable")[:DRAWN_GROUPS] if peak[k] > 0]
     for k in sorted(drawn):
-        ax.plot(minutes, tl.fatigue[:, k], lw=1.5, label=halves[k].name)
+        ax.plot(times, tl.fatigue[:, k], lw=1.5, label=halves[k].name)
     ax.axhline(s.fatigue_threshold, color="tab:red", ls="--", lw=1, label="fatigue threshold")
     ax.axhline(s.recovery_threshold, color="tab:green", ls="--", lw=1, label="recovery threshold")
     if spans:
@@ -51,6 +54,7 @@ def _fatigue_panel(ax: plt.Axes, result: SimulationResult, heading: str) -> None
     ax.set_title(heading, fontsize=9, loc="left")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    return unit
 
 
 def _schedule_text(result: SimulationResult) -> str:
@@ -65,20 +69,22 @@ def _schedule_text(result: SimulationResult) -> str:
 def plot_schedule(result: SimulationResult, path: Path) -> Path:
     """Fatigue of the most tired groups over the run, the rest periods shaded (schedule.png)."""
     fig, ax = plt.subplots(figsize=(9.0, 4.0), dpi=120)
-    _fatigue_panel(ax, result, f"{title(result)} — {_schedule_text(result)}")
-    ax.set_xlabel("time (min)")
+    unit = _fatigue_panel(ax, result, f"{title(result)} — {_schedule_text(result)}")
+    ax.set_xlabel(f"time ({unit})")
     return save_figure(fig, path)
 
 
 def plot_runs(runs: Sequence[tuple[str, SimulationResult]], path: Path) -> Path:
     """One fatigue panel per labelled run (e.g. the two ends of a duty-cycle bracket), on a
-    shared time axis [min], rest periods shaded."""
+    shared time axis, rest periods shaded."""
     fig, axes = plt.subplots(
         len(runs), 1, sharex=True, squeeze=False, figsize=(9.0, 1.0 + 2.6 * len(runs)), dpi=120
     )
-    for ax, (label, result) in zip(axes[:, 0], runs, strict=True):
+    units = {
         _fatigue_panel(ax, result, f"{label}: {_schedule_text(result)}")
-    axes[-1, 0].set_xlabel("time (min)")
+        for ax, (label, result) in zip(axes[:, 0], runs, strict=True)
+    }
+    axes[-1, 0].set_xlabel(f"time ({units.pop() if len(units) == 1 else 'min'})")
     return save_figure(fig, path)
 
 

@@ -13,6 +13,7 @@ from casadi_posture.ergonomics import reba, rula
 from casadi_posture.output.key_postures import recoveries, title
 from casadi_posture.output.saving import save_figure
 from casadi_posture.output.scores import SIDES, step_scores
+from casadi_posture.output.time_axis import in_unit
 from casadi_posture.simulation import SimulationResult
 
 #: The bands' colours, from the lowest action level to the highest.
@@ -43,7 +44,7 @@ def plot_scores(result: SimulationResult, path: Path) -> Path:
     """RULA (top) and REBA (bottom) of each side over time [min], the action levels shaded
     and named, each recovery marked; a rest step (not scored) leaves a gap."""
     tl, steps = result.timeline, step_scores(result)
-    minutes = tl.time / 60
+    times, unit = in_unit(tl.time)
     scored = next(s for s in steps if s)
     fig, axes = plt.subplots(2, 1, figsize=(9.5, 6.5), dpi=120, sharex=True)
     sheets = (
@@ -66,10 +67,10 @@ def plot_scores(result: SimulationResult, path: Path) -> Path:
         for i, side in enumerate(scored):
             shift = SIDE_OFFSET * (0.5 - i) if len(scored) > 1 else 0.0
             values = np.array([np.nan if s is None else grade(s[i]) for s in steps], dtype=float)
-            ax.step(minutes, values + shift, where="post", lw=1.8, label=SIDES[side.side])
+            ax.step(times, values + shift, where="post", lw=1.8, label=SIDES[side.side])
         for k, step in enumerate(recoveries(result)):
             mark = "recovered (fatigue 0.5)" if k == 0 else None
-            ax.axvline(minutes[step], color="tab:green", lw=1, ls="--", label=mark)
+            ax.axvline(times[step], color="tab:green", lw=1, ls="--", label=mark)
         top = bands(sheet)[-1][1]
         ax.set_ylim(0.5, top)
         ax.set_yticks(range(1, int(top) + 1))
@@ -77,8 +78,8 @@ def plot_scores(result: SimulationResult, path: Path) -> Path:
         ax.legend(fontsize=7, loc="upper left")
         ax.grid(alpha=0.25, axis="x")
     axes[0].set_title(title(result), fontsize=9)
-    axes[-1].set_xlabel("time (min)")
-    axes[-1].set_xlim(minutes[0], max(minutes[-1], minutes[0] + 1e-9))
+    axes[-1].set_xlabel(f"time ({unit})")
+    axes[-1].set_xlim(times[0], max(times[-1], times[0] + 1e-9))
     if len(scored) > 1:
         note = f"the sides' lines are drawn {SIDE_OFFSET:g} apart where they coincide"
         fig.text(0.01, 0.005, note, fontsize=6, color="0.4")
