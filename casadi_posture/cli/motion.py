@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import click
@@ -131,6 +132,7 @@ def evaluate(
         if compare and not resolved.spec.tasks:
             expected = "at least one task to predict a posture from (--compare-prediction)"
             raise ProblemError(resolved.path, "tasks", MISSING, expected)
+        started = time.perf_counter()
         recording = api.read_motion(
             resolved,
             motion,
@@ -140,11 +142,12 @@ def evaluate(
             repeat_times=repeat_times,
             until_s=until_s,
         )
+        read_s = time.perf_counter() - started
         out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
         api.check_out(out, force=force)
         run = api.evaluate(resolved, recording)
         files = write_run(run, out, command_line(), report=not no_report)
-        code = report_recording(run, files, law(resolved), show_all)
+        code = report_recording(run, files, law(resolved), show_all, read_s=read_s)
         if compare and run.stop != "interrupted":
             comparison = compare_prediction(resolved, run.result)
             predicted = api.Simulation(comparison.predicted)

@@ -344,16 +344,23 @@ def echo_outcome(
 
 
 def report_recording(
-    run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool = False
+    run: api.Simulation,
+    files: list[Path],
+    recovery_law: str,
+    show_all: bool = False,
+    *,
+    read_s: float | None = None,
 ) -> int:
-    """Print what evaluate shows: the recording, the groups' loads over it (on a large body
-    the most loaded, unless ``show_all``), the outcome; its exit code."""
+    """Print what evaluate shows: the recording (read in ``read_s`` [s] wall, if given), the
+    groups' loads over it (on a large body the most loaded, unless ``show_all``), the
+    outcome; its exit code."""
     result, report = run.result, run.summary()
     recorded = report["recording"]
+    read = "" if read_s is None else f"read in {read_s:.2f} s, "
     click.echo(
         f"{result.problem.path} driven by {recorded['source']}: {recorded['frames']} frames, "
-        f"{recorded['first_time_s']:g} to {recorded['last_time_s']:g} s; "
-        f"{result.wall_time_s:.2f} s wall"
+        f"{recorded['first_time_s']:g} to {recorded['last_time_s']:g} s; {read}"
+        f"replayed in {result.wall_time_s:.2f} s wall"
     )
     for note in recorded["notes"]:
         click.echo(f"  {note}")
