@@ -30,7 +30,9 @@ from casadi_posture.ik.solvers import check_solver
 from casadi_posture.motion.angles import read_angles
 from casadi_posture.motion.bvh import read_bvh
 from casadi_posture.motion.marker_ik import read_c3d_recording
+from casadi_posture.motion.markers import read_c3d
 from casadi_posture.motion.recording import Recording, between, held_frames, repeat, resample
+from casadi_posture.motion.scaling import body_lengths, lengths_note, measured_lengths
 from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
@@ -228,9 +230,24 @@ def read_motion(
         "problem": problem.path,
         "solver_spec": problem.spec.solver if solver is None else None,
     }  # the file's solver options are for the file's solver
-    kind = path.suffix.lower()
+    kind, lengths = path.suffix.lower(), None
     if kind == ".c3d":
-        recording, _ = read_c3d_recording(path, problem.body, spec, problem.posture, **ik)
+        markers = read_c3d(path)
+        if spec.scale_segments:
+            lengths = measured_lengths(
+                markers,
+                problem.body,
+                spec.markers,
+                spec.scale_segments,
+                spec.calibrate_s,
+                problem.path,
+            )
+            before = body_lengths(problem.body, spec.scale_segments)
+            problem = scaled(problem, lengths)
+        recording, _ = read_c3d_recording(markers, problem.body, spec, problem.posture, **ik)
+        if lengths:
+            notes = (*recording.notes, lengths_note(lengths, before))
+            recording = replace(recording, notes=notes, segment_lengths_m=lengths)
     elif kind == ".bvh":
         recording = read_bvh(path, problem.body, spec.bvh, problem.posture, **ik)
     else:
@@ -283,7 +300,15 @@ def evaluate(
             repeat_times=repeat_times,
             until_s=until_s,
         )
+    if recording.segment_lengths_m:
+        problem = scaled(problem, recording.segment_lengths_m)
     return Simulation(replay(problem, recording))
+
+
+def scaled(problem: Problem, lengths: Mapping[str, float]) -> Problem:
+    """``problem`` with its segments at ``lengths`` [m] (segment name → length): a body
+    scaled to a recorded subject."""
+    return problem.with_overrides({f"body.segments.{n}.length_m": v for n, v in lengths.items()})
 
 
 def write_solve(

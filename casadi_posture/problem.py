@@ -113,6 +113,13 @@ class Problem:
         """The compiled torque functions of this problem (build once, evaluate many)."""
         return TorqueModel(self.body, self.loads, self.passive, self.strength)
 
+    def with_overrides(self, overrides: Mapping[str, Any]) -> Problem:
+        """The same problem with more dotted keys set, as ``load_problem``'s ``overrides``
+        (segment lengths measured on a recorded subject, say)."""
+        changed = problem_from_data(self.data, self.path, overrides)
+        merged = {**self.overrides, **overrides}
+        return replace(changed, overrides=merged, text_sha256=self.text_sha256)
+
     def with_posture(self, degrees: dict[str, float], key: str = "--posture") -> Problem:
         """The same problem at another posture, given per DOF in degrees."""
         q = self.posture.copy()

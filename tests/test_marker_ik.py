@@ -511,3 +511,56 @@ def test_the_report_of_a_recording_without_tasks_shows_the_marker_fit(
     run.write(tmp_path / "out")
     page = (tmp_path / "out" / "report.html").read_text()
     assert "fit to the markers (mm)" in page and "task residuals" not in page
+
+
+def test_segments_are_scaled_to_the_subject_from_the_static_window(
+    seated: cp.Problem, tmp_path: Path
+) -> None:
+    """A subject with longer upper arms (0.31 m) and forearms (0.28 m) than the body: the
+    static first frame gives both lengths back to 1e-5 m (the file's float32 in mm), the
+    body built with them fits every frame, every angle back to 1e-5 rad (but the forearms'
+    turn, which these markers do not show) and evaluate runs on it; read without
+    scaling, the same markers are centimetres off. A segment the body has not, no static
+    window, or markers on other landmarks (a length 0.1× the body's) are one-line errors."""
+    subject = cp.load(
+        SEATED, {"body.segments.upper_arm.length_m": 0.31, "body.segments.forearm.length_m": 0.28}
+    )
+    q = np.vstack([seated.posture, _motion(seated, MOVED_DEG)])
+    turn = rotation_rpy(0.0, 0.0, 2.5)  # the lab turned about its vertical z
+    at = ca.Function(
+        "at", [subject.body.q], [ca.horzcat(*[subject.body.landmark(n) for n in LANDMARKS]).T]
+    )
+    lab = np.array([(np.asarray(at(qk)) - T_LAB) @ turn for qk in q])
+    path = _write_c3d(tmp_path / "subject.c3d", [n.upper() for n in LANDMARKS], lab)
+    mapping = {n: [n.upper()] for n in LANDMARKS}
+    keys = {"motion.markers": mapping, "motion.calibrate_s": [0.0, 0.0]}
+    scaling = cp.load(SEATED, {**keys, "motion.scale_segments": ["upper_arm", "forearm"]})
+    recording = cp.read_motion(scaling, path, solver="nullspace")
+    assert recording.segment_lengths_m == pytest.approx(
+        {"upper_arm": 0.31, "forearm": 0.28}, abs=1e-5
+    )
+    assert any("forearm 0.266 → 0.280 m" in n for n in recording.notes)
+    # a forearm's turn is not seen: its wrist, grip and knuckles lie on its axis
+    seen = [i for i, d in enumerate(seated.body.dof_names) if "pronation" not in d]
+    np.testing.assert_allclose(recording.q[:, seen], q[:, seen], atol=1e-5)
+    assert max(r.max() for r in recording.residuals.values()) < 1e-5
+    run = cp.evaluate(scaling, recording)
+    assert run.result.problem.overrides["body.segments.forearm.length_m"] == pytest.approx(
+        0.28, abs=1e-5
+    )
+    plain = cp.read_motion(cp.load(SEATED, keys), path, solver="nullspace")
+    assert max(r.max() for r in plain.residuals.values()) > 0.01
+    for sets, match in (
+        ({**keys, "motion.scale_segments": ["thigh"]}, "thigh"),
+        ({"motion.markers": mapping, "motion.scale_segments": ["forearm"]}, "calibrate_s"),
+        (
+            {
+                **keys,
+                "motion.markers": {**mapping, "wrist_r": ["ELBOW_R"]},
+                "motion.scale_segments": ["forearm"],
+            },
+            "the body's",
+        ),
+    ):
+        with pytest.raises(ProblemError, match=match):
+            cp.read_motion(cp.load(SEATED, sets), path, solver="nullspace")

@@ -55,7 +55,7 @@ def test_the_markers_fit_the_arm_and_flag_the_shoulder_the_body_cannot_follow(
 
 def test_the_elbow_and_wrist_follow_opensim_s_ik_of_the_same_trial(recorded: tuple) -> None:
     """pyomeca's OpenSim IK (a shoulder model with clavicle and scapula) for 1.56-2.43 s:
-    the elbow flexion within 6° RMS (4.8° measured) and the wrist flexion within 5° (3.5°),
+    the elbow flexion within 6° RMS (5.2° measured) and the wrist flexion within 5° (3.0°),
     frame by frame, while the elbow goes from 40° to 125°."""
     problem, recording = recorded
     reference = _opensim()
@@ -76,15 +76,16 @@ def test_both_solvers_read_the_same_motion(recorded: tuple) -> None:
     assert np.degrees(np.abs(other.q - recording.q).max()) < 0.5
 
 
-def test_setting_the_box_on_the_shelf_takes_the_shoulder_flexors_to_their_strength(
+def test_setting_the_box_on_the_shelf_takes_the_shoulder_flexors_near_their_strength(
     recorded: tuple, tmp_path: Path
 ) -> None:
     """Held from when it leaves the table (2.1 s) to when it rests on the shelf (3.8 s),
-    the box loads the right shoulder flexors most, at their strength (the model's woman of
-    default size) as she sets it down with her arm stretched at head height: 100.0 %MVC at
-    3.8 s, by either solver. The low back stays far below the NIOSH limit; the fit's flag
-    gives exit code 1."""
+    the box loads the right shoulder flexors most: 99 %MVC of the model's woman of default
+    size (her forearm and hand at her own lengths) as she sets it down with her arm
+    stretched at head height, at 3.8 s. One lift tires nothing to the threshold; the low
+    back stays far below the NIOSH limit; the fit's flag gives exit code 1."""
     problem, recording = recorded
+    assert recording.segment_lengths_m == pytest.approx({"forearm": 0.258, "hand": 0.068}, abs=1e-3)
     out = tmp_path / "box"
     result = CliRunner().invoke(
         main, ["evaluate", str(PROBLEM), "--motion", str(RECORDING), "--out", str(out)]
@@ -93,12 +94,28 @@ def test_setting_the_box_on_the_shelf_takes_the_shoulder_flexors_to_their_streng
     summary = json.loads((out / "summary.json").read_text())
     peaks = {h["half_joint"]: h["peak_load_pct_mvc"] for h in summary["half_joints"]}
     assert max(peaks, key=peaks.get) == "shoulder_flexors_r"
-    assert peaks["shoulder_flexors_r"] == pytest.approx(100.0, abs=1.0)
+    assert peaks["shoulder_flexors_r"] == pytest.approx(99.0, abs=1.0)
     assert all(v < 80.0 for k, v in peaks.items() if k != "shoulder_flexors_r")
+    assert summary["first_to_fatigue"] is None and summary["exhausted_group"] is None
     timeline = cp.evaluate(problem, recording).result.timeline
     group = [h.name for h in problem.body.half_joints].index("shoulder_flexors_r")
     assert timeline.time[np.argmax(timeline.load[:, group])] == pytest.approx(3.8)
     assert summary["low_back"]["peak_compression_N"] < 3400.0
+
+
+def test_lift_after_lift_her_shoulder_flexors_give_out_in_about_two_minutes(
+    recorded: tuple,
+) -> None:
+    """The lift repeated back to back as a work cycle (every 5.8 s; resampled to 0.05 s,
+    which moves the times by under 0.3 s from the file's own 0.02 s frames): the right
+    shoulder flexors reach the fatigue threshold at 90.5 s and are exhausted at 131 s."""
+    problem, _ = recorded
+    run = cp.evaluate(problem, RECORDING, resample_s=0.05, until_s=140.0)
+    summary = run.summary()
+    first, exhausted = summary["first_to_fatigue"], summary["exhausted_group"]
+    assert first["half_joint"] == exhausted["half_joint"] == "shoulder_flexors_r"
+    assert first["time_s"] == pytest.approx(90.5, abs=1.0)
+    assert exhausted["time_s"] == pytest.approx(131.1, abs=1.0)
 
 
 def test_her_hold_beside_the_posture_our_model_predicts_for_it(tmp_path: Path) -> None:
@@ -114,19 +131,19 @@ def test_her_hold_beside_the_posture_our_model_predicts_for_it(tmp_path: Path) -
     compared = json.loads((out / "prediction.json").read_text())
     rows = {r["dof"]: r for r in compared["postures"]}
     expected = {  # recorded mean, predicted mean [deg], as docs/motion.md shows them
-        "shoulder_flexion_r": (118, 92),
-        "shoulder_abduction_r": (42, 73),
-        "shoulder_rotation_r": (66, -8),
-        "elbow_flexion_r": (30, 63),
-        "lumbar_rotation": (11, 38),
+        "shoulder_flexion_r": (118.3, 95.6),
+        "shoulder_abduction_r": (41.7, 73.8),
+        "shoulder_rotation_r": (66.8, -5.2),
+        "elbow_flexion_r": (29.5, 55.7),
+        "lumbar_rotation": (11.5, 37.8),
     }
     for dof, (recorded, predicted) in expected.items():
-        assert rows[dof]["recorded_mean_deg"] == pytest.approx(recorded, abs=0.6), dof
-        assert rows[dof]["predicted_mean_deg"] == pytest.approx(predicted, abs=0.6), dof
+        assert rows[dof]["recorded_mean_deg"] == pytest.approx(recorded, abs=0.3), dof
+        assert rows[dof]["predicted_mean_deg"] == pytest.approx(predicted, abs=0.3), dof
     outcomes = {o["outcome"]: o for o in compared["outcomes"]}
     endurance = outcomes["its endurance at start (min)"]
-    assert endurance["recorded"] == pytest.approx(0.27, abs=0.01)
-    assert endurance["predicted"] == pytest.approx(2.54, abs=0.01)
+    assert endurance["recorded"] == pytest.approx(0.28, abs=0.01)
+    assert endurance["predicted"] == pytest.approx(2.51, abs=0.01)
 
 
 HOLD_TASKS = """
@@ -135,7 +152,7 @@ name = "hand_at_the_box"
 kind = "position"
 effector = "grip_r"
 priority = 1
-target_m = [0.46, -0.30, 1.67]
+target_m = [0.46, -0.30, 1.68]
 
 [[tasks]]
 name = "comfort"

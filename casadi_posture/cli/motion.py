@@ -149,7 +149,7 @@ def evaluate(
         files = write_run(run, out, command_line(), report=not no_report)
         code = report_recording(run, files, law(resolved), show_all, read_s=read_s)
         if compare and run.stop != "interrupted":
-            comparison = compare_prediction(resolved, run.result)
+            comparison = compare_prediction(run.result.problem, run.result)
             predicted = api.Simulation(comparison.predicted)
             extra = write_run(predicted, out / "predicted", command_line(), report=not no_report)
             extra += write_prediction(comparison, out)

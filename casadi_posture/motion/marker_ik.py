@@ -70,7 +70,7 @@ class MarkerFit:
 
 
 def read_c3d_recording(
-    path: str | Path,
+    source: str | Path | Markers,
     body: BodyModel,
     spec: MotionSpec,
     posture: np.ndarray,
@@ -79,14 +79,15 @@ def read_c3d_recording(
     problem: Path,
     solver_spec: SolverSpec | None = None,
 ) -> tuple[Recording, MarkerFit]:
-    """The C3D file ``path`` as joint angles of ``body`` by the problem file ``problem``'s
+    """The C3D file ``source`` (or its markers, read) as joint angles of ``body`` by the
+    problem file ``problem``'s
     ``[motion]`` (``spec``: the marker mapping, the gap and residual limits), ``posture``
     [rad] (the lowest IK level) and the IK solver ``solver_name``."""
     if not spec.markers:
         expected = "a [motion.markers] table mapping landmarks to the C3D file's marker labels"
         raise ProblemError(problem, "motion.markers", MISSING, expected)
     return markers_to_recording(
-        read_c3d(path),
+        source if isinstance(source, Markers) else read_c3d(source),
         body,
         spec.markers,
         posture,

@@ -36,6 +36,9 @@ class Recording:
     residuals: dict[str, np.ndarray] | None = None
     #: How it was read, enough to read it again: the file's SHA-256 and the reader's options.
     read_with: dict[str, Any] | None = None
+    #: Segment lengths [m] measured on the subject (``motion.scale_segments``), by segment
+    #: name: ``evaluate`` builds the body with them.
+    segment_lengths_m: dict[str, float] | None = None
 
     @property
     def frames(self) -> int:

@@ -559,7 +559,9 @@ class MotionSpec(Strict):
     axis, where each landmark is placed on its segment at its markers; ``fit`` "segments"
     fits each point from its anchor (the fitted joint up its chain) instead of where it is;
     ``clusters`` maps a landmark no marker sits on (a shoulder's centre) to 3 or more markers
-    rigid with it, which carry it from where the calibration places it.
+    rigid with it, which carry it from where the calibration places it; ``scale_segments``
+    names segments (``forearm``) whose length is measured in the calibration window
+    between their end landmarks' markers, the body then built with it.
     ``held_s`` gives, per load name, the
     [start, end] windows [s] of the recording's time during which it is held (a load not
     named is held throughout)."""
@@ -573,6 +575,7 @@ class MotionSpec(Strict):
     lab_up: Literal["x", "y", "z", "-x", "-y", "-z"] = "z"
     fit: Literal["positions", "segments"] = "positions"
     clusters: dict[str, Annotated[list[str], Field(min_length=3)]] = {}
+    scale_segments: list[str] = []
     held_s: dict[str, list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = {}
     bvh: BvhSpec = BvhSpec()
 
