@@ -220,7 +220,7 @@ def read_motion(
     joint angles [deg] with a time column [s]; a C3D file of markers or a BVH file of joint
     rotations, turned into joint angles by the IK ``solver`` (default: the file's) with the
     problem's ``[motion.markers]`` or ``[motion.bvh]``; each load held in its
-    ``motion.held_s`` windows; cut to the frames ``between_s`` ([start, end] [s], the file's
+    ``motion.held_s`` windows; cut to the frames ``between_s`` (start and end [s], the file's
     time) if given, resampled every ``resample_s`` [s] if given, then played
     ``repeat_times`` times or until ``until_s`` [s] as a work cycle."""
     path, spec = Path(motion), problem.spec.motion
