@@ -11,7 +11,7 @@ negative one; its load is ``T_N = 100·|τa|/st`` [%MVC].
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import lru_cache
 
 import casadi as ca
@@ -77,14 +77,27 @@ class TorqueModel:
         )
         self.default_loads = pack(self.loads)
         dense = [ca.densify(v) for v in self.function(q, p)]
+        self._last: tuple[tuple[bytes, bytes], Torques] | None = None
         self._compiled = Compiled(
             ca.Function("torques_dense", [q, p], dense, ["q", "loads"], self.function.name_out())
         )
 
     def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
-        """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own. (One
-        model per thread: it evaluates in buffers of its own.)"""
+        """All torques at posture ``q`` [rad]; ``loads`` defaults to the model's own. The
+        last answer is kept: a hold whose posture and loads do not change (most steps of a
+        simulation nothing tires in) gets a copy of it. (One model per thread: it evaluates
+        in buffers of its own.)"""
         p = self.default_loads if loads is None else loads
+        key = (np.asarray(q, dtype=float).tobytes(), np.asarray(p, dtype=float).tobytes())
+        if self._last is not None and self._last[0] == key:
+            kept = self._last[1]
+            return Torques(*(np.array(getattr(kept, f.name)) for f in fields(Torques)))
+        torques = self._evaluate(q, p)
+        self._last = (key, torques)
+        return Torques(*(np.array(getattr(torques, f.name)) for f in fields(Torques)))
+
+    def _evaluate(self, q: Sequence[float], p: np.ndarray) -> Torques:
+        """The compiled call behind ``evaluate``."""
         out = self._compiled(q=q, loads=p)
         tau_e, tau_p, tau_a, st = (
             out[k].copy() for k in ("tau_ext", "tau_pas", "tau_act", "strength")

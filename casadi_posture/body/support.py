@@ -167,14 +167,19 @@ class Support:
         body = self.body
         com = body.com(carried)
         f = ca.Function("balance", [body.q], [com[:2], self._points(body.q)])
-        many = f.map(len(postures))
-        ground, soles = (np.asarray(v) for v in many(np.asarray(postures).T))
-        k = soles.shape[1] // len(postures)
-        margins = [
-            margin(convex_hull(soles[:2, i * k : (i + 1) * k].T), ground[:, i])
-            for i in range(len(postures))
-        ]
-        return ground.T, np.asarray(margins)
+        # each distinct posture once: a hold that does not move repeats one row
+        distinct, back = np.unique(np.asarray(postures, dtype=float), axis=0, return_inverse=True)
+        many = f.map(len(distinct))
+        ground, soles = (np.asarray(v) for v in many(distinct.T))
+        k = soles.shape[1] // len(distinct)
+        margins = np.array(
+            [
+                margin(convex_hull(soles[:2, i * k : (i + 1) * k].T), ground[:, i])
+                for i in range(len(distinct))
+            ]
+        )
+        back = np.ravel(back)
+        return ground.T[back], margins[back]
 
     def polygon(self, q: np.ndarray) -> np.ndarray | None:
         """Convex hull (k×2, counter-clockwise) [m] of the soles on the floor at posture

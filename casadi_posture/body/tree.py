@@ -134,6 +134,7 @@ class BodyModel:
         self.gravity = gravity
         self._check()
         self.index = {d.name: i for i, d in enumerate(self.dofs)}
+        self._half_joints: tuple[HalfJoint, ...] | None = None
         self.q = ca.SX.sym("q", len(self.dofs))
         self._rotation: dict[str | None, ca.SX] = {None: ca.SX.eye(3)}
         self._origin: dict[str | None, ca.SX] = {None: ca.SX.zeros(3)}
@@ -201,12 +202,17 @@ class BodyModel:
 
     @property
     def half_joints(self) -> list[HalfJoint]:
-        """The two half-joints of every DOF, positive first, in DOF order."""
-        out = []
-        for i, dof in enumerate(self.dofs):
-            out.append(HalfJoint(dof.positive, dof.name, i, +1, dof.regions[0]))
-            out.append(HalfJoint(dof.negative, dof.name, i, -1, dof.regions[1]))
-        return out
+        """The two half-joints of every DOF, positive first, in DOF order (built once)."""
+        if self._half_joints is None:
+            self._half_joints = tuple(
+                HalfJoint(name, dof.name, i, sign, region)
+                for i, dof in enumerate(self.dofs)
+                for name, sign, region in (
+                    (dof.positive, +1, dof.regions[0]),
+                    (dof.negative, -1, dof.regions[1]),
+                )
+            )
+        return list(self._half_joints)
 
     @property
     def total_mass(self) -> float:
