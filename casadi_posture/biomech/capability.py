@@ -177,7 +177,7 @@ def population(
     out = []
     known = set(known_groups())
     for k, name in enumerate(groups):
-        cv, sd_source, sd_status = _spread(data_name(name))
+        cv, sd_source, sd_status = strength_spread(data_name(name))
         given = float(strength[k])
         where = f" ({own[name]})" if name in own else " (strength.toml)"
         if data_name(name) in known:
@@ -205,7 +205,7 @@ def population(
     return tuple(out)
 
 
-def _spread(group: str) -> tuple[dict[Sex, float], str, SdStatus]:
+def strength_spread(group: str) -> tuple[dict[Sex, float], str, SdStatus]:
     """The coefficient of variation of a group's strength per sex, its source and status:
     Anderson 2007's, pooled over its young and middle-aged rows, where it has data, else our
     estimate."""

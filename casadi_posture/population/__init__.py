@@ -1,0 +1,1 @@
+"""Virtual workers drawn from measured distributions, for population runs."""

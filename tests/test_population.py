@@ -1,0 +1,102 @@
+"""Virtual workers: drawn to ANSUR II's statistics and the shipped strength spreads."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from casadi_posture.biomech.capability import strength_spread
+from casadi_posture.population.sampling import MAX_WORKERS, draw_workers, group_correlation
+
+GROUPS = ("shoulder_flexors", "elbow_flexors", "knee_extensors")
+#: ANSUR II's raw data, as docs/population.md gives them: stature mean and SD [m], body
+#: mass mean, SD and P5 / P50 / P95 [kg], and the correlation of stature with mass.
+SURVEY = {
+    "male": (1.7562, 0.0686, 85.52, 14.22, (64.4, 84.6, 110.7), 0.4689),
+    "female": (1.6285, 0.0642, 67.76, 10.98, (51.3, 66.8, 87.1), 0.5335),
+}
+
+
+@pytest.fixture(scope="module")
+def many() -> list:
+    return draw_workers(20_000, ("male", "female"), GROUPS, seed=7)
+
+
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_the_workers_have_the_survey_s_stature_and_mass(many: list, sex: str) -> None:
+    """20 000 of each sex: stature and mass means within 4 standard errors, SDs within 2 %,
+    the mass percentiles within 1 kg (a lognormal mass: the survey's skew) and the
+    correlation within 0.02."""
+    workers = [w for w in many if w.sex == sex]
+    stature = np.array([w.stature_m for w in workers])
+    mass = np.array([w.mass_kg for w in workers])
+    h_mean, h_sd, m_mean, m_sd, percentiles, r = SURVEY[sex]
+    n = len(workers)
+    assert abs(stature.mean() - h_mean) < 4 * h_sd / np.sqrt(n)
+    assert abs(mass.mean() - m_mean) < 4 * m_sd / np.sqrt(n)
+    assert stature.std() == pytest.approx(h_sd, rel=0.02)
+    assert mass.std() == pytest.approx(m_sd, rel=0.02)
+    np.testing.assert_allclose(np.percentile(mass, [5, 50, 95]), percentiles, atol=1.0)
+    assert np.corrcoef(stature, mass)[0, 1] == pytest.approx(r, abs=0.02)
+
+
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_strength_factors_have_mean_1_the_group_spread_and_the_person_s_correlation(
+    many: list, sex: str
+) -> None:
+    factors = np.array([[w.strength[g] for g in GROUPS] for w in many if w.sex == sex])
+    np.testing.assert_allclose(factors.mean(axis=0), 1.0, atol=0.01)
+    cv = [strength_spread(g)[0][sex] for g in GROUPS]
+    np.testing.assert_allclose(factors.std(axis=0) / factors.mean(axis=0), cv, rtol=0.03)
+    assert (factors > 0).all()
+    logs = np.corrcoef(np.log(factors).T)
+    off = logs[np.triu_indices(len(GROUPS), 1)]
+    np.testing.assert_allclose(off, group_correlation(), atol=0.03)
+
+
+def test_a_seed_gives_the_same_workers_and_each_sex_its_own_stream() -> None:
+    both = draw_workers(50, ("male", "female"), GROUPS, seed=3)
+    assert both == draw_workers(50, ("male", "female"), GROUPS, seed=3)
+    men = draw_workers(50, ("male",), GROUPS, seed=3)
+    assert men == [w for w in both if w.sex == "male"]
+    assert draw_workers(50, ("male",), GROUPS, seed=4) != men
+    assert [w.name for w in men[:2]] == ["male-0000", "male-0001"]
+
+
+@pytest.mark.parametrize("correlation", [0.0, 1.0])
+def test_the_group_correlation_can_be_set(correlation: float) -> None:
+    workers = draw_workers(5000, ("female",), GROUPS, seed=1, correlation=correlation)
+    logs = np.log([[w.strength[g] for g in GROUPS] for w in workers])
+    assert np.corrcoef(logs.T)[0, 1] == pytest.approx(correlation, abs=0.04)
+
+
+@pytest.mark.parametrize(
+    ("n", "correlation"), [(0, None), (MAX_WORKERS + 1, None), (10, 1.5), (10, -0.1)]
+)
+def test_bad_sizes_and_correlations_are_refused(n: int, correlation: float | None) -> None:
+    with pytest.raises(ValueError, match=r"n:|correlation:"):
+        draw_workers(n, ("male",), GROUPS, seed=1, correlation=correlation)
+
+
+def test_a_worker_s_strength_reaches_the_torque_model_as_a_problem_key() -> None:
+    """The keys docs/population.md gives: a worker's sex, size and a group's factor set on
+    a problem scale that group's strength by the factor at the worker's size."""
+    import casadi_posture as cp
+
+    worker = draw_workers(1, ("female",), ("shoulder_flexors",), seed=2)[0]
+    body = {
+        "body.sex": "female",
+        "body.stature_m": worker.stature_m,
+        "body.mass_kg": worker.mass_kg,
+    }
+    plain = cp.load("problems/standing_wall_horizontal.toml", body)
+    factor = worker.strength["shoulder_flexors"]
+    key = "body.half_joints.shoulder_flexors_r.strength_scale"
+    scaled = cp.load("problems/standing_wall_horizontal.toml", {**body, key: factor})
+    k = [h.name for h in plain.body.half_joints].index("shoulder_flexors_r")
+    base = plain.torque_model().evaluate(plain.posture).strength
+    got = scaled.torque_model().evaluate(scaled.posture).strength
+    assert len(base) == len(plain.body.half_joints)
+    assert got[k] == pytest.approx(factor * base[k], rel=1e-9)
+    others = np.delete(np.arange(len(base)), k)
+    np.testing.assert_allclose(got[others], base[others], rtol=1e-12)
