@@ -34,6 +34,8 @@ _PUBLIC = {
     "write_compare": "casadi_posture.api",
     "whatif": "casadi_posture.api",
     "batch": "casadi_posture.api",
+    "population": "casadi_posture.api",
+    "PopulationReport": "casadi_posture.runs.population",
     "Simulation": "casadi_posture.api",
     "sensitivity": "casadi_posture.sensitivity_analysis.analysis",
     "Sensitivity": "casadi_posture.sensitivity_analysis.analysis",

@@ -59,6 +59,12 @@ from casadi_posture.runs import compare as comparison
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
 from casadi_posture.runs.compare_report import write_compare_page
 from casadi_posture.runs.grid_report import PAGE, write_grid_report
+from casadi_posture.runs.population import (
+    MAX_WORKERS,
+    POPULATION_OUTPUTS,
+    PopulationReport,
+    run_population,
+)
 from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
 from casadi_posture.runs.whatif_plots import plot_outcomes
 from casadi_posture.simulation import SimulationResult, replay
@@ -447,6 +453,58 @@ def batch(
     if report:
         write_grid_report(answer, out, f"Batch: {', '.join(paths)}")
     return answer
+
+
+def population(
+    problem: str | Path,
+    out: str | Path,
+    *,
+    n: int,
+    sexes: Sequence[str] = ("male", "female"),
+    seed: int = 1,
+    correlation: float | None = None,
+    solver: str | None = None,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    resume: bool = False,
+    force: bool = False,
+    files: bool = False,
+    max_cases: int = MAX_WORKERS,
+    overrides: Mapping[str, Any] | None = None,
+    quiet: bool = True,
+) -> PopulationReport:
+    """``n`` virtual workers of each of ``sexes`` (docs/population.md), drawn for ``seed``,
+    each holding the problem's task on a body of their own sex, stature, mass and
+    strengths, run as batch cases into ``out`` (resumable; ``jobs`` local processes or a
+    Dask ``scheduler``; per worker only its summary row unless ``files``); writes
+    population.json (the share of each sex still holding at 1, 2, 5, 10 and 20 minutes
+    with 95 % intervals) and its figures. With ``jobs`` > 1 a script must start its work
+    under ``if __name__ == "__main__":``."""
+    path = Path(problem)
+    check_solver(solver, path)
+    unknown = [s for s in sexes if s not in ("male", "female")]
+    if unknown or not sexes:
+        raise ProblemError(path, "--sex", unknown or list(sexes), "male, female or both")
+    text = read_problem_text(path)
+    resolved = load_problem(path, overrides, text=text)
+    out = Path(out)
+    prepare_runs(out, resume=resume, force=force, inputs=[path], outputs=POPULATION_OUTPUTS)
+    return run_population(
+        resolved,
+        text,
+        out,
+        n=n,
+        sexes=tuple(sexes),
+        seed=seed,
+        correlation=correlation,
+        solver=solver,
+        jobs=jobs,
+        scheduler=scheduler,
+        resume=resume,
+        files=files,
+        max_cases=max_cases,
+        quiet=quiet,
+    )
 
 
 def _problem_file(

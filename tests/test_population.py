@@ -100,3 +100,77 @@ def test_a_worker_s_strength_reaches_the_torque_model_as_a_problem_key() -> None
     assert got[k] == pytest.approx(factor * base[k], rel=1e-9)
     others = np.delete(np.arange(len(base)), k)
     np.testing.assert_allclose(got[others], base[others], rtol=1e-12)
+
+
+def test_the_wilson_interval_matches_its_textbook_values() -> None:
+    from casadi_posture.population.statistics import wilson
+
+    np.testing.assert_allclose(wilson(5, 10), (0.2366, 0.7634), atol=1e-4)
+    np.testing.assert_allclose(wilson(0, 10), (0.0, 0.2775), atol=1e-4)
+    np.testing.assert_allclose(wilson(10, 10), (0.7225, 1.0), atol=1e-4)
+
+
+ARM = "problems/holding_horizontal.toml"
+
+
+def _population(tmp_path, *extra: str):
+    from click.testing import CliRunner
+
+    from casadi_posture.cli import main
+
+    out = tmp_path / "pop"
+    args = ["population", ARM, "--n", "3", "--out", str(out), "--set", "simulation.duration_s=90"]
+    return CliRunner().invoke(main, [*args, *extra]), out
+
+
+def test_a_population_run_reports_the_share_still_holding_from_its_workers_rows(
+    tmp_path,
+) -> None:
+    """3 workers of each sex on the 2-DOF arm for 90 s: population.json's share at 1 min is
+    the share of summary.csv's rows held at least 60 s, with its Wilson interval; at 2 min
+    and later it is beyond the run. The same seed gives the same file; --resume runs
+    nothing again; each worker's body is its draw."""
+    import csv
+    import json
+
+    from casadi_posture.population.statistics import wilson
+
+    result, out = _population(tmp_path)
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "population.json").read_text())
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert len(rows) == 6 and {r["status"] for r in rows} == {"ok"}
+    workers = draw_workers(3, ("male", "female"), [], seed=1)
+    for worker in workers:
+        row = next(r for r in rows if r["case"] == worker.name)
+        assert float(row["body.stature_m"]) == pytest.approx(worker.stature_m, abs=1e-4)
+        assert row["body.sex"] == worker.sex
+    for sex, data in summary["sexes"].items():
+        mine = [r for r in rows if r["body.sex"] == sex]
+        held = sum(float(r["task_held_s"]) >= 60.0 for r in mine)
+        first = data["still_holding"][0]
+        assert (first["minutes"], first["n"], first["held"]) == (1, 3, held)
+        assert (first["low"], first["high"]) == pytest.approx(wilson(held, 3))
+        assert all(s["share"] is None for s in data["still_holding"][1:])
+    assert (out / "survival.png").exists() and (out / "held_vs_stature.png").exists()
+    assert not (out / "cases" / "male-0000" / "timeline.csv").exists()  # rows only
+    again, _ = _population(tmp_path, "--resume")
+    assert again.exit_code == 0 and "0 run now, 6 already done" in again.output
+    assert json.loads((out / "population.json").read_text()) == summary
+    fresh, _ = _population(tmp_path, "--force")
+    assert fresh.exit_code == 0 and json.loads((out / "population.json").read_text()) == summary
+
+
+@pytest.mark.parametrize(
+    ("extra", "expected"),
+    [
+        (["--n", "0"], "--n = 0: expected at least 1 worker per sex"),
+        (["--n", "1500"], "--n = 1500: expected at most 2000 workers in all"),
+        (["--correlation", "2"], "--correlation = 2.0: expected 0 to 1"),
+        (["--sex", "other"], "Invalid value for '--sex'"),
+    ],
+)
+def test_bad_population_input_is_one_line_with_exit_2(tmp_path, extra, expected) -> None:
+    result, out = _population(tmp_path, *extra)
+    assert result.exit_code == 2 and expected in result.output
+    assert not out.exists()

@@ -85,7 +85,9 @@ class Case:
     """A problem file to run with ``overrides`` (dotted keys), ``solver`` (None: the
     file's), and either the full time simulation or only the static outcomes. ``text``
     carries the file's content to workers that have no copy of it (None: read the file
-    where the case runs); ``report`` writes a simulated case's report.html."""
+    where the case runs); ``report`` writes a simulated case's report.html; without
+    ``files`` a case keeps only its summary row (no timeline, no figure: a population's
+    workers)."""
 
     name: str
     problem: str
@@ -94,6 +96,7 @@ class Case:
     simulate: bool = True
     text: str | None = None
     report: bool = True
+    files: bool = True
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the case's result (and the tool's version)."""
@@ -189,7 +192,7 @@ def run_case(case: Case) -> Outcome:
             return Outcome(case.name, row, {})
         files: dict[str, bytes] = {}
         if case.simulate:
-            outcomes, files = _simulate(problem, case.solver, case.report)
+            outcomes, files = _simulate(problem, case.solver, case.report, case.files)
         else:
             outcomes = static_row(solve(problem, case.solver))
         flags = outcomes.pop("flags")
@@ -213,10 +216,10 @@ def one_line(text: str) -> str:
 
 
 def _simulate(
-    problem: Problem, solver: str | None, report: bool
+    problem: Problem, solver: str | None, report: bool, files: bool = True
 ) -> tuple[dict[str, Any], dict[str, bytes]]:
     """A simulated case's row and files (with ``report``, its report.html too: an extra,
-    left out if it cannot be written)."""
+    left out if it cannot be written; without ``files``, none)."""
     from casadi_posture.output.html_report import write_report
     from casadi_posture.output.plots import plot_simulation
     from casadi_posture.output.results import write_results
@@ -226,6 +229,8 @@ def _simulate(
     result = simulate(problem, solver)
     if result.stop == "interrupted":
         raise KeyboardInterrupt
+    if not files:
+        return simulation_row(result), {}
     with tempfile.TemporaryDirectory() as folder:
         written = write_results(result, Path(folder)) + plot_simulation(result, Path(folder))
         if report:
