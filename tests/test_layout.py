@@ -24,7 +24,7 @@ FLOORS = {
     "problem": 6,
     "ergonomics": 6,
     "motion": 6,
-    "population": 6,
+    "people": 6,
     "static": 7,
     "adjustment": 7,
     "simulation": 8,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from casadi_posture.biomech.capability import strength_spread
-from casadi_posture.population.sampling import MAX_WORKERS, draw_workers, group_correlation
+from casadi_posture.people.sampling import MAX_WORKERS, draw_workers, group_correlation
 
 GROUPS = ("shoulder_flexors", "elbow_flexors", "knee_extensors")
 #: ANSUR II's raw data, as docs/population.md gives them: stature mean and SD [m], body
@@ -103,7 +103,7 @@ def test_a_worker_s_strength_reaches_the_torque_model_as_a_problem_key() -> None
 
 
 def test_the_wilson_interval_matches_its_textbook_values() -> None:
-    from casadi_posture.population.statistics import wilson
+    from casadi_posture.people.statistics import wilson
 
     np.testing.assert_allclose(wilson(5, 10), (0.2366, 0.7634), atol=1e-4)
     np.testing.assert_allclose(wilson(0, 10), (0.0, 0.2775), atol=1e-4)
@@ -133,7 +133,7 @@ def test_a_population_run_reports_the_share_still_holding_from_its_workers_rows(
     import csv
     import json
 
-    from casadi_posture.population.statistics import wilson
+    from casadi_posture.people.statistics import wilson
 
     result, out = _population(tmp_path)
     assert result.exit_code == 0, result.output

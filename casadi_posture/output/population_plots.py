@@ -13,7 +13,7 @@ import numpy as np
 from casadi_posture.biomech.capability import PEOPLE, SEXES
 from casadi_posture.output.saving import save_figure
 from casadi_posture.output.time_axis import time_unit
-from casadi_posture.population.statistics import wilson
+from casadi_posture.people.statistics import wilson
 
 COLOURS = {"male": "tab:blue", "female": "tab:red"}
 

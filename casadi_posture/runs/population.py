@@ -13,8 +13,8 @@ from typing import Any
 from casadi_posture.biomech.capability import PEOPLE, SEXES, Sex
 from casadi_posture.data.parameters import data_name
 from casadi_posture.errors import MISSING, ProblemError
-from casadi_posture.population.sampling import Worker, draw_workers, group_correlation
-from casadi_posture.population.statistics import wilson
+from casadi_posture.people.sampling import Worker, draw_workers, group_correlation
+from casadi_posture.people.statistics import wilson
 from casadi_posture.problem import Problem
 from casadi_posture.runs.batch import BatchReport, Case
 
