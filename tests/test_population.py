@@ -174,3 +174,14 @@ def test_bad_population_input_is_one_line_with_exit_2(tmp_path, extra, expected)
     result, out = _population(tmp_path, *extra)
     assert result.exit_code == 2 and expected in result.output
     assert not out.exists()
+
+
+def test_the_survival_curve_drops_at_once_for_a_worker_who_never_held() -> None:
+    from casadi_posture.output.population_plots import survival_steps
+
+    held = np.array([0.0, 10.0, 10.0, 20.0])
+    times, counts = survival_steps(held, np.array([False, False, False, True]), 20.0)
+    np.testing.assert_array_equal(times, [0.0, 10.0, 20.0])
+    assert counts == [3, 1, 1]  # after 0 s, after 10 s, still holding at the end
+    _, counts = survival_steps(held, np.zeros(4, dtype=bool), 20.0)
+    assert counts == [3, 1, 0]  # the last one gave out at the end of its own run

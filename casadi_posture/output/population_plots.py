@@ -34,16 +34,27 @@ def _figure(
     return fig, ax, scale, unit, ran
 
 
+def survival_steps(held: np.ndarray, still: np.ndarray, end: float) -> tuple[np.ndarray, list[int]]:
+    """The steps of a survival curve: the times [s] at which it changes (0, each time held
+    before ``end``, ``end``) and how many of the times ``held`` [s] are still holding just
+    after each (one held 0 s never held); at ``end`` itself, those whose run ended with
+    the task still held (``still``)."""
+    times = np.unique(np.concatenate([[0.0], held[held < end], [end]]))
+    counts = [int((held > t + 1e-9).sum()) for t in times[:-1]]
+    return times, [*counts, int((still & (held >= end - 1e-9)).sum())]
+
+
 def plot_survival(rows: Sequence[Mapping[str, Any]], path: Path, title: str) -> Path:
     """survival.png: per sex, the share of workers still holding the task against time
-    (a step down at each worker's time held; a run that ended with the task held stays up
-    to its end), with its Wilson 95 % band."""
+    (``survival_steps``: a step down at each worker's time held, at once for one who never
+    held it; a run that ended with the task held stays up to its end), with its Wilson
+    95 % band."""
     fig, ax, scale, unit, workers = _figure(rows)
     for sex, ran in workers.items():
         held = np.array([float(r["task_held_s"]) for r in ran])
+        still = np.array([bool(r["task_held_is_lower_bound"]) for r in ran])
         end = max(float(r["simulated_s"]) for r in ran)
-        times = np.unique(np.concatenate([[0.0], held[held < end], [end]]))
-        counts = [int((held >= t - 1e-9).sum()) for t in times]
+        times, counts = survival_steps(held, still, end)
         share = np.array(counts) / len(ran)
         band = np.array([wilson(count, len(ran)) for count in counts])
         label = f"{PEOPLE[sex]} (n = {len(ran)})"
