@@ -125,6 +125,8 @@ def population(
     for sex in report.summary["sexes"].values():
         gave_out = ", ".join(f"{k} {v}" for k, v in sorted(sex["exhausted_region"].items()))
         click.echo(f"{sex['people']}: the region that gave out: {gave_out}")
+        if sex["flagged"]:
+            click.echo(f"{sex['people']}: {sex['flagged']} worker(s) flagged (summary.csv)")
         if sex["failed"]:
             click.echo(f"{sex['people']}: {sex['failed']} worker(s) failed (summary.csv)")
     if report.summary["groups_not_varied"]:

@@ -111,7 +111,8 @@ def shares(
 def population_summary(
     report: BatchReport, workers: Sequence[Worker], fixed: Sequence[str]
 ) -> dict[str, Any]:
-    """What population.json holds: per sex the workers drawn, run and failed, the shares
+    """What population.json holds: per sex the workers drawn, run, failed and flagged (an
+    answer that needs care, over strength at the start say: their rows say why), the shares
     still holding at ``HORIZONS_MIN`` with their intervals, the median time held [s], the
     regions that gave out first and the limiting regions at the start, counted; the groups
     not varied."""
@@ -128,6 +129,7 @@ def population_summary(
             "drawn": len(rows),
             "ran": len(ran),
             "failed": len(rows) - len(ran),
+            "flagged": sum(r.get("status") == "flagged" for r in rows),
             "still_holding": [s.__dict__ for s in shares(rows)],
             "median_task_held_s": held[len(held) // 2] if held else None,
             "exhausted_region": dict(Counter(r["exhausted_region"] or "none" for r in ran)),
