@@ -14,6 +14,7 @@ from click.testing import CliRunner
 from casadi_posture import interrupt
 from casadi_posture.api import Simulation
 from casadi_posture.cli import main
+from casadi_posture.errors import ProblemError
 from casadi_posture.output.results import summary, timeline_columns
 from casadi_posture.problem import load_problem, problem_from_data
 from casadi_posture.runs.duty_cycle import duty_cycle
@@ -156,6 +157,41 @@ def test_duty_cycle_bracket_is_checked_by_simulation_and_by_hand() -> None:
     assert len(found.trials) == len(found.summary()["trials"]) >= 3
 
 
+def test_the_duty_cycle_is_bracketed_to_its_relative_precision() -> None:
+    """10 kg, 60 s of rest: a 5 s tolerance alone stops at a 5-10 s bracket, a duty cycle
+    of 7.7 % sustainable and 14.3 % not, reported before as "7.7 %". With the default 5 %
+    precision the bisection goes on to one time step, 9-10 s (13.0 and 14.3 %), and says
+    that the step limits it; each end is a simulation."""
+    problem = load_problem(HORIZONTAL, {"loads[0].mass_kg": 10.0})
+    loose = duty_cycle(problem, 60.0, horizon_s=600.0, precision=1.0)
+    assert (loose.sustainable_t_on_s, loose.failing_t_on_s) == (5.0, 10.0)
+    assert loose.duty_cycle_bracket_pct == pytest.approx((100 * 5 / 65, 100 * 10 / 70))
+    assert not loose.step_limited
+    found = duty_cycle(problem, 60.0, horizon_s=600.0)
+    assert (found.sustainable_t_on_s, found.failing_t_on_s) == (9.0, 10.0)
+    low, high = found.duty_cycle_bracket_pct
+    assert (low, high) == pytest.approx((100 * 9 / 69, 100 * 10 / 70))
+    assert found.step_limited and high - low > 0.05 * low
+    assert found.summary()["bracket_limited_by_time_step"] is True
+    light = load_problem(HORIZONTAL, {"loads[0].mass_kg": 5.0})
+    fine = duty_cycle(light, 30.0, horizon_s=600.0)
+    low, high = fine.duty_cycle_bracket_pct
+    assert high - low <= 0.05 * low and not fine.step_limited
+    with pytest.raises(ProblemError, match="precision"):
+        duty_cycle(problem, 60.0, precision=0.0)
+
+
+@pytest.mark.parametrize(
+    ("text", "seconds"), [("600", 600.0), ("600s", 600.0), ("30min", 1800.0), ("8h", 28800.0)]
+)
+def test_a_horizon_takes_a_unit(text: str, seconds: float) -> None:
+    from casadi_posture.cli.schedule import duration_s
+
+    assert duration_s(text, "--horizon", None) == seconds
+    with pytest.raises(ProblemError, match="--horizon"):
+        duration_s("8 hours", "--horizon", None)
+
+
 def test_duty_cycle_continuous_and_none() -> None:
     light = load_problem(HORIZONTAL, {"loads[0].mass_kg": 0.0})
     assert duty_cycle(light, 30.0, horizon_s=300.0).verdict == "continuous"
@@ -166,7 +202,7 @@ def test_duty_cycle_continuous_and_none() -> None:
 
 def test_duty_cycle_command(tmp_path: Path) -> None:
     out = tmp_path / "d"
-    args = ["--t-off", "0,30", "--horizon", "300", "--tolerance", "10", "--out", out]
+    args = ["--t-off", "0,30", "--horizon", "5min", "--tolerance", "10", "--out", out]
     result = _run("duty-cycle", HORIZONTAL, *args)
     assert result.exit_code == 0, result.output
     assert "no duty cycle works" in result.output and "duty cycle: " in result.output

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import click
@@ -19,6 +20,7 @@ from casadi_posture.cli.common import (
 from casadi_posture.errors import ProblemError
 from casadi_posture.output.report import table
 from casadi_posture.runs.duty_cycle import (
+    DEFAULT_PRECISION,
     DutyCycle,
     check_seconds,
     duty_cycles,
@@ -55,16 +57,24 @@ def _seconds_list(text: str, problem: str) -> list[float]:
 )
 @click.option(
     "--horizon",
-    type=float,
     default=None,
-    help="Simulated time in s over which the threshold must not be reached "
-    "[default: the file's simulation.duration_s].",
+    metavar="DURATION",
+    help="Simulated time over which the threshold must not be reached, in s or with a "
+    "unit: 1800, 30min, 8h [default: the file's simulation.duration_s].",
 )
 @click.option(
     "--tolerance",
     type=float,
     default=None,
     help="Width in s of the bracket the bisection stops at [default: 5 s, at least one time step].",
+)
+@click.option(
+    "--precision",
+    type=float,
+    default=DEFAULT_PRECISION,
+    show_default=True,
+    help="Relative width of the duty cycle's bracket the bisection stops at (0.05: its ends "
+    "within 5 % of the lower), unless one time step is already wider.",
 )
 @SOLVER_OPTION
 @SET_OPTION
@@ -79,8 +89,9 @@ def _seconds_list(text: str, problem: str) -> list[float]:
 def duty_cycle(
     problem: str,
     t_off: str,
-    horizon: float | None,
+    horizon: str | None,
     tolerance: float | None,
+    precision: float,
     solver: str | None,
     sets: tuple[str, ...],
     out: Path | None,
@@ -105,7 +116,8 @@ def duty_cycle(
           --horizon 1800 --out out/duty-cycle
     """
     rests = _seconds_list(t_off, problem)
-    for key, value in (("--horizon", horizon), ("--tolerance", tolerance)):
+    horizon_s = None if horizon is None else duration_s(horizon, "--horizon", problem)
+    for key, value in (("--horizon", horizon_s), ("--tolerance", tolerance)):
         if value is not None:
             check_seconds(value, key, problem, positive=True)
     with interrupt.deferred():
@@ -114,7 +126,12 @@ def duty_cycle(
         if out is not None:
             api.check_out(out, force=force)
         cycles = duty_cycles(
-            resolved, rests, horizon_s=horizon, tolerance_s=tolerance, solver=solver
+            resolved,
+            rests,
+            horizon_s=horizon_s,
+            tolerance_s=tolerance,
+            precision=precision,
+            solver=solver,
         )
         files = write_duty_cycles(cycles, out) if out is not None else []
     if as_json:
@@ -131,7 +148,8 @@ def _report(cycles: list[DutyCycle], files: list[Path]) -> None:
     for cycle in cycles:
         click.echo(
             f"{cycle.problem}: rest {cycle.rest_s:g} s per cycle, horizon {cycle.horizon_s:g} s, "
-            f"tolerance {cycle.tolerance_s:g} s (time step {cycle.time_step_s:g} s); threshold: "
+            f"tolerance {cycle.tolerance_s:g} s and {100 * cycle.precision:g} % of the duty "
+            f"cycle (time step {cycle.time_step_s:g} s); threshold: "
             f"a group's fatigue at {cycle.fatigue_threshold:g} (fatigue.fatigue_threshold)"
         )
         click.echo(
@@ -197,10 +215,36 @@ def answer_lines(cycle: DutyCycle) -> list[str]:
             f"sustainable: t_on ≤ {ok:g} s of hold per cycle with {rest:g} s of rest stays "
             f"below the threshold for {cycle.horizon_s:g} s; {cycle.failing_t_on_s:g} s "
             f"reaches it{where}",
-            f"duty cycle: {cycle.duty_cycle_pct:.1f} % ({ok:g} s of every {ok + rest:g} s)",
+            _duty_line(cycle),
         ]
     lines.append(f"{len(cycle.trials)} simulations, {cycle.wall_time_s:.2f} s wall")
     return lines + [f"FLAGGED: {flag}" for flag in cycle.flags]
+
+
+def _duty_line(cycle: DutyCycle) -> str:
+    """The duty cycle's bracket in words, and what limits it."""
+    ok, rest = cycle.sustainable_t_on_s, cycle.rest_s
+    low, high = cycle.duty_cycle_bracket_pct or (cycle.duty_cycle_pct, cycle.duty_cycle_pct)
+    line = (
+        f"duty cycle: {low:.1f} % sustainable ({ok:g} s of every {ok + rest:g} s), {high:.1f} % not"
+    )
+    if cycle.step_limited:
+        line += (
+            f"; the bracket is one time step ({cycle.time_step_s:g} s) wide: a shorter "
+            "simulation.time_step_s narrows it"
+        )
+    return line
+
+
+def duration_s(text: str, key: str, path: object) -> float:
+    """A duration given as seconds or with a unit (``600``, ``600s``, ``30min``, ``8h``)
+    in s; anything else is a one-line error naming ``key``."""
+    units = {"h": 3600.0, "min": 60.0, "s": 1.0, "": 1.0}
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(h|min|s)?\s*", text)
+    if match is None:
+        expected = "a duration in s, or with a unit: 1800, 30min, 8h"
+        raise ProblemError(path, key, text, expected)
+    return float(match.group(1)) * units[match.group(2) or ""]
 
 
 def _or_dash(value: float | None) -> str:

@@ -13,7 +13,10 @@ as in every schedule). First the continuous hold (``t_on`` = the horizon): if it
 below the threshold, the task is sustainable continuously. Then one step of hold per cycle:
 if even that reaches the threshold, no duty cycle works. Otherwise bisection on n keeps a
 bracket ``n_ok < n_fail`` of simulated holds (``n_ok`` below the threshold over the
-horizon, ``n_fail`` reaching it) until ``(n_fail − n_ok)·dt ≤ tolerance``. The bisection
+horizon, ``n_fail`` reaching it) until ``(n_fail − n_ok)·dt ≤ tolerance`` and the duty
+cycles of its ends, ``n·dt / (n·dt + t_off)``, differ by at most ``precision`` of the lower
+one, or the bracket is one step wide (the time step then limits it, and says so). The
+bisection
 assumes that a longer hold per cycle never tires less; both ends of the reported bracket
 are simulations, whatever the assumption.
 """
@@ -42,6 +45,8 @@ from casadi_posture.simulation import SimulationResult, simulate, whole_steps
 
 #: Default bisection tolerance on t_on [s] (at least one time step).
 DEFAULT_TOLERANCE_S = 5.0
+#: Default relative precision of the duty cycle's bracket: its ends within 5 % of the lower.
+DEFAULT_PRECISION = 0.05
 
 #: What a search found: a bracket of holds; sustainable continuously over the horizon; no
 #: hold of even one step sustainable; the task never held at the start; stopped by Ctrl-C.
@@ -81,6 +86,7 @@ class DutyCycle:
     rest_s: float
     horizon_s: float
     tolerance_s: float
+    precision: float
     time_step_s: float
     fatigue_threshold: float
     verdict: Verdict
@@ -101,6 +107,25 @@ class DutyCycle:
         if self.sustainable_t_on_s is None or self.verdict != "bracketed":
             return None
         return 100.0 * self.sustainable_t_on_s / (self.sustainable_t_on_s + self.rest_s)
+
+    @property
+    def duty_cycle_bracket_pct(self) -> tuple[float, float] | None:
+        """The duty cycles [%] of the bracket's ends, sustainable and failing (None unless
+        bracketed)."""
+        ok, fail = self.sustainable_t_on_s, self.failing_t_on_s
+        if self.verdict != "bracketed" or ok is None or fail is None:
+            return None
+        return 100.0 * ok / (ok + self.rest_s), 100.0 * fail / (fail + self.rest_s)
+
+    @property
+    def step_limited(self) -> bool:
+        """Whether the time step, not the tolerance or the precision, set the bracket's
+        width (one step wide and still wider than asked)."""
+        bracket = self.duty_cycle_bracket_pct
+        if bracket is None or self.failing_t_on_s is None or self.sustainable_t_on_s is None:
+            return False
+        one_step = self.failing_t_on_s - self.sustainable_t_on_s <= self.time_step_s * 1.000001
+        return one_step and bracket[1] - bracket[0] > self.precision * bracket[0] * 1.000001
 
     @property
     def flags(self) -> list[str]:
@@ -137,12 +162,15 @@ class DutyCycle:
             "rest_s": self.rest_s,
             "horizon_s": self.horizon_s,
             "tolerance_s": self.tolerance_s,
+            "precision": self.precision,
             "time_step_s": self.time_step_s,
             "fatigue_threshold": self.fatigue_threshold,
             "verdict": self.verdict,
             "sustainable_t_on_s": self.sustainable_t_on_s,
             "failing_t_on_s": self.failing_t_on_s,
             "duty_cycle_pct": self.duty_cycle_pct,
+            "duty_cycle_bracket_pct": self.duty_cycle_bracket_pct,
+            "bracket_limited_by_time_step": self.step_limited,
             "simulations": len(self.trials),
             "wall_time_s": self.wall_time_s,
             "trials": [t.__dict__ for t in self.trials],
@@ -164,12 +192,14 @@ def duty_cycle(
     *,
     horizon_s: float | None = None,
     tolerance_s: float | None = None,
+    precision: float = DEFAULT_PRECISION,
     solver: str | None = None,
 ) -> DutyCycle:
     """The longest hold per cycle with rest ``t_off_s`` [s] that never reaches the fatigue
     threshold within ``horizon_s`` [s] (default: the problem's ``simulation.duration_s``),
-    to ``tolerance_s`` [s] (default 5 s, at least one time step), by bisection over
-    simulations (module docstring). Ctrl-C stops it between two steps of a trial: the
+    to ``tolerance_s`` [s] (default 5 s, at least one time step) and the duty cycle to
+    ``precision`` (relative, default 5 %), by bisection over simulations (module
+    docstring). Ctrl-C stops it between two steps of a trial: the
     verdict is then ``interrupted`` and the bracket is the one found so far."""
     path, spec = problem.path, problem.spec
     check_solver(solver, path)
@@ -189,6 +219,8 @@ def duty_cycle(
     )
     if tolerance < dt - 1e-9 * dt:
         raise ProblemError(path, "tolerance_s", tolerance, f"at least the time step, {dt:g} s")
+    if not (math.isfinite(precision) and 0.0 < precision <= 1.0):
+        raise ProblemError(path, "precision", precision, "a relative width above 0, at most 1")
     steps = math.floor(horizon / dt + 1e-9)
     if steps < 1:
         raise ProblemError(path, "horizon_s", horizon, f"at least the time step, {dt:g} s")
@@ -231,6 +263,7 @@ def duty_cycle(
             whole_steps(t_off, dt) * dt,
             steps * dt,
             tolerance,
+            precision,
             dt,
             spec.fatigue.fatigue_threshold,
             verdict,
@@ -255,8 +288,15 @@ def duty_cycle(
             return answer("interrupted", None, steps)
         if shortest:
             return answer("none", None, 1)
+        rest = whole_steps(t_off, dt) * dt
+
+        def wide(ok: int, fail: int) -> bool:
+            """Whether the bracket is wider than asked (in t_on or in duty cycle)."""
+            low, high = (n * dt / (n * dt + rest) for n in (ok, fail))
+            return fail - ok > tolerance_steps or high - low > precision * low
+
         ok, fail = 1, steps
-        while fail - ok > tolerance_steps:
+        while fail - ok > 1 and wide(ok, fail):
             middle = (ok + fail) // 2
             reached = trial(middle)
             if reached is None:
@@ -271,13 +311,21 @@ def duty_cycles(
     *,
     horizon_s: float | None = None,
     tolerance_s: float | None = None,
+    precision: float = DEFAULT_PRECISION,
     solver: str | None = None,
 ) -> list[DutyCycle]:
     """``duty_cycle`` for each rest time [s], stopping after one that Ctrl-C cut short."""
     out = []
     for rest in t_off_s:
         out.append(
-            duty_cycle(problem, rest, horizon_s=horizon_s, tolerance_s=tolerance_s, solver=solver)
+            duty_cycle(
+                problem,
+                rest,
+                horizon_s=horizon_s,
+                tolerance_s=tolerance_s,
+                precision=precision,
+                solver=solver,
+            )
         )
         if out[-1].verdict == "interrupted":
             break
@@ -293,6 +341,10 @@ def table_columns(cycles: Sequence[DutyCycle]) -> dict[str, list[Any]]:
         "sustainable_t_on_s": [c.sustainable_t_on_s for c in cycles],
         "failing_t_on_s": [c.failing_t_on_s for c in cycles],
         "duty_cycle_pct": [c.duty_cycle_pct for c in cycles],
+        "failing_duty_cycle_pct": [
+            None if c.duty_cycle_bracket_pct is None else c.duty_cycle_bracket_pct[1]
+            for c in cycles
+        ],
         "horizon_s": [c.horizon_s for c in cycles],
         "tolerance_s": [c.tolerance_s for c in cycles],
         "simulations": [len(c.trials) for c in cycles],
