@@ -89,12 +89,10 @@ class TorqueModel:
         in buffers of its own.)"""
         p = self.default_loads if loads is None else loads
         key = (np.asarray(q, dtype=float).tobytes(), np.asarray(p, dtype=float).tobytes())
-        if self._last is not None and self._last[0] == key:
-            kept = self._last[1]
-            return Torques(*(np.array(getattr(kept, f.name)) for f in fields(Torques)))
-        torques = self._evaluate(q, p)
-        self._last = (key, torques)
-        return Torques(*(np.array(getattr(torques, f.name)) for f in fields(Torques)))
+        if self._last is None or self._last[0] != key:
+            self._last = (key, self._evaluate(q, p))
+        kept = self._last[1]
+        return Torques(*(np.array(getattr(kept, f.name)) for f in fields(Torques)))
 
     def _evaluate(self, q: Sequence[float], p: np.ndarray) -> Torques:
         """The compiled call behind ``evaluate``."""

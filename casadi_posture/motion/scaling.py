@@ -11,6 +11,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture.body.tree import BodyModel
+from casadi_posture.data.parameters import data_name
 from casadi_posture.errors import ProblemError
 from casadi_posture.motion.markers import Markers
 
@@ -39,13 +40,18 @@ def measured_lengths(
         raise ProblemError(problem, key, list(segments), expected)
     time = markers.time
     inside = (time >= window_s[0] - 1e-9) & (time <= window_s[1] + 1e-9)
+    zero = _at_zero(body)
     out: dict[str, float] = {}
     for name in segments:
         sides = [s for s in body.segments if s.name in (name, f"{name}_r", f"{name}_l")]
         ends = [(s.proximal, s.distal) for s in sides if s.proximal and s.distal]
         mapped = [(a, b) for a, b in ends if a in mapping and b in mapping]
+        if not ends:
+            known = sorted({data_name(s.name) for s in body.segments if s.proximal and s.distal})
+            expected = f"a segment of the body with two end landmarks: {', '.join(known)}"
+            raise ProblemError(problem, key, name, expected)
         if not mapped:
-            wanted = " or ".join(f"{a} and {b}" for a, b in ends) or "none: no end landmarks"
+            wanted = " or ".join(f"{a} and {b}" for a, b in ends)
             expected = f"a segment whose end landmarks are mapped in motion.markers ({wanted})"
             raise ProblemError(problem, key, name, expected)
         lengths = []
@@ -56,7 +62,7 @@ def measured_lengths(
                 expected = f"frames of motion.calibrate_s where the markers of {a} and {b} are seen"
                 raise ProblemError(problem, key, name, expected)
             length = float(np.linalg.norm(second[seen] - first[seen], axis=1).mean())
-            model = _distance(body, a, b)
+            model = float(np.linalg.norm(zero[b] - zero[a]))
             if not 1 / MAX_LENGTH_RATIO <= length / model <= MAX_LENGTH_RATIO:
                 expected = (
                     f"a length from {a} to {b} within {MAX_LENGTH_RATIO:g}× the body's "
@@ -79,14 +85,14 @@ def lengths_note(lengths: Mapping[str, float], before: Mapping[str, float]) -> s
 def body_lengths(body: BodyModel, segments: Sequence[str]) -> dict[str, float]:
     """Each named segment's length in ``body`` [m], the mean of its sides' end landmarks'
     distance at the zero posture (segments ``measured_lengths`` accepted)."""
-    out = {}
+    zero, out = _at_zero(body), {}
     for name in segments:
         ends = [
             (s.proximal, s.distal)
             for s in body.segments
             if s.name in (name, f"{name}_r", f"{name}_l") and s.proximal and s.distal
         ]
-        out[name] = float(np.mean([_distance(body, a, b) for a, b in ends]))
+        out[name] = float(np.mean([np.linalg.norm(zero[b] - zero[a]) for a, b in ends]))
     return out
 
 
@@ -95,7 +101,8 @@ def _mean(markers: Markers, labels: Sequence[str]) -> np.ndarray:
     return np.mean([markers.marker(label) for label in labels], axis=0)
 
 
-def _distance(body: BodyModel, a: str, b: str) -> float:
-    """The distance [m] between landmarks ``a`` and ``b`` at the zero posture."""
-    gap = ca.Function("gap", [body.q], [body.landmark(b) - body.landmark(a)])
-    return float(np.linalg.norm(np.asarray(gap(np.zeros(body.n)))))
+def _at_zero(body: BodyModel) -> dict[str, np.ndarray]:
+    """Every landmark of ``body`` at the zero posture [m], in one compiled call."""
+    names = list(body.landmarks)
+    where = ca.Function("where", [body.q], [ca.horzcat(*[body.landmark(n) for n in names])])
+    return dict(zip(names, np.asarray(where(np.zeros(body.n))).T, strict=True))
