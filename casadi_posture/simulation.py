@@ -17,7 +17,9 @@ posture with the constraint as it then stands.
 from __future__ import annotations
 
 import math
+import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -425,15 +427,58 @@ class _State:
     reused: int = 0
 
 
+@dataclass(frozen=True)
+class _Built:
+    """What a run builds from the body, the posture, the loads and the tasks alone, kept for
+    the next run of the same: the hierarchy and the whole-body adjustment to copy, the torque
+    model to share (one thread)."""
+
+    hierarchy: TaskHierarchy
+    torque_model: TorqueModel
+    whole_body: WholeBodyAdjustment | None
+
+
+#: Problem structures whose builds a thread keeps (a what-if grid, a duty-cycle search or a
+#: second run of one problem varies the fatigue settings, the schedule or the duration).
+KEPT_BUILDS = 4
+_builds = threading.local()
+
+
+def _built(problem: Problem, keep_levels: int | None) -> _Built:
+    """The problem's hierarchy, torque model and (``keep_levels`` given) whole-body
+    adjustment, built once per body, posture, loads and tasks in this thread."""
+    key = (
+        problem.spec.model_dump_json(
+            include={"body", "posture_deg", "loads", "tasks"}, warnings=False
+        ),
+        problem.posture.tobytes(),
+        keep_levels,
+    )
+    if not hasattr(_builds, "kept"):
+        _builds.kept = OrderedDict()
+    kept: OrderedDict = _builds.kept
+    if key in kept:
+        kept.move_to_end(key)
+        return kept[key]
+    hierarchy, torque_model = problem.hierarchy(), problem.torque_model()
+    whole_body = None
+    if keep_levels is not None and _effort_comfort(problem) is not None:
+        whole_body = WholeBodyAdjustment(torque_model, hierarchy, k=0.0, keep_levels=keep_levels)
+    kept[key] = _Built(hierarchy, torque_model, whole_body)
+    while len(kept) > KEPT_BUILDS:
+        kept.popitem(last=False)
+    return kept[key]
+
+
 def _setup(problem: Problem, solver: str | None) -> _Setup:
     """Check the adjustment's settings and build, once, every object the steps use."""
     spec, body = problem.spec, problem.body
     name = solver or spec.solver.name
-    hierarchy = problem.hierarchy()
-    solvers = _Solvers(name, problem, hierarchy)
-    torque_model = problem.torque_model()
-    fatigue = problem.fatigue
     settings = constraint_settings(problem)
+    built = _built(problem, settings.keep_levels if settings.adjustment == "whole_body" else None)
+    hierarchy, torque_model = built.hierarchy.copy(), built.torque_model
+    solvers = _Solvers(name, problem, hierarchy)
+    fatigue = problem.fatigue
     if settings.keep_levels > hierarchy.depth:
         raise ProblemError(
             problem.path,
@@ -451,9 +496,7 @@ def _setup(problem: Problem, solver: str | None) -> _Setup:
                 "a problem whose lowest level is a comfort task counting effort "
                 "(kind = 'comfort', measure = 'discomfort_effort'), or adjustment = 'paper'",
             )
-        whole_body = WholeBodyAdjustment(
-            torque_model, hierarchy, k=settings.fatigue_weight, keep_levels=settings.keep_levels
-        )
+        whole_body = built.whole_body.rebind(hierarchy, k=settings.fatigue_weight)
         kept_solvers = _Solvers(name, problem, whole_body.kept_hierarchy)
     constraint = FatigueConstraint(body, problem.passive, settings, hierarchy, whole_body)
     effector, line = _tracked(problem, hierarchy)

@@ -23,6 +23,8 @@ every level.
 
 from __future__ import annotations
 
+import copy
+
 import casadi as ca
 import numpy as np
 
@@ -51,11 +53,7 @@ class WholeBodyAdjustment:
         self.kept = keep_levels if 0 < keep_levels < hierarchy.depth else hierarchy.depth - 1
         tasks = [t for level in hierarchy.levels[: self.kept] for t in level] + [comfort]
         self.kept_hierarchy = TaskHierarchy(body, tasks)
-        span = comfort.effort_weights()
-        self._weights = [
-            (h, slice(h.offset(comfort) + span.start, h.offset(comfort) + span.stop))
-            for h in (hierarchy, self.kept_hierarchy)
-        ]
+        self._bind(hierarchy, self.kept_hierarchy)
         self.k = k
         signs = np.array([h.sign for h in body.half_joints], dtype=float)
         active = ca.vertcat(*[torque_model.tau_act[h.dof_index] for h in body.half_joints])
@@ -70,6 +68,24 @@ class WholeBodyAdjustment:
             )
         )
         self._packed = torque_model.default_loads
+
+    def _bind(self, hierarchy: TaskHierarchy, kept: TaskHierarchy) -> None:
+        """Set the effort weights in the targets of ``hierarchy`` and ``kept`` from now on."""
+        comfort = hierarchy.levels[-1][0]
+        span = comfort.effort_weights()
+        self.kept_hierarchy = kept
+        self._weights = [
+            (h, slice(h.offset(comfort) + span.start, h.offset(comfort) + span.stop))
+            for h in (hierarchy, kept)
+        ]
+
+    def rebind(self, hierarchy: TaskHierarchy, *, k: float) -> WholeBodyAdjustment:
+        """This adjustment, its compiled functions shared, on ``hierarchy`` (a copy of the
+        one it was built on) with a copy of its kept levels and the weight ``k``."""
+        other = copy.copy(self)
+        other._bind(hierarchy, self.kept_hierarchy.copy())
+        other.k = k
+        return other
 
     def weigh(self, fatigue: np.ndarray | None) -> None:
         """Weigh each group's effort by 1 + k·F_g (``fatigue`` per half-joint), or by 1 (None)."""

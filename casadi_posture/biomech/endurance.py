@@ -9,7 +9,7 @@ extrapolates its own curve there (see each class). Coefficients live in
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
@@ -32,8 +32,9 @@ class EnduranceModel(Protocol):
 
     name: str
 
-    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
-        """Endurance time [s] of each load [%MVC] held by a muscle group of ``region``."""
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: Regions) -> np.ndarray:
+        """Endurance time [s] of each load [%MVC] held by a muscle group of ``region`` (one
+        name, or one per load: every group of a body in one call)."""
         ...
 
     def parameters(self, regions: Iterable[str]) -> list[Parameter]:
@@ -46,6 +47,9 @@ class EnduranceModel(Protocol):
         given by ``value(record)``: its number, or a symbol to differentiate with respect to."""
         ...
 
+
+#: A joint region's name, or one per load.
+Regions = str | Sequence[str]
 
 #: A parameter record's value in an expression: a number, or a CasADi symbol.
 Value = Callable[[Parameter], ca.SX | float]
@@ -77,7 +81,7 @@ class Manenica:
         """The model with the shipped coefficients (``endurance.manenica``)."""
         return cls(a=_data("manenica.a"), b=_data("manenica.b"))
 
-    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: Regions) -> np.ndarray:
         """Maximum holding time [s] of each load [%MVC]; ``region`` is ignored."""
         load = np.asarray(load_pct_mvc, dtype=float)
         return SECONDS_PER_MINUTE * np.exp(self.a.value - self.b.value * load)
@@ -101,6 +105,7 @@ class FreyLawAvin:
 
     table: Mapping[str, Parameter]
     name: str = field(default="frey_law_avin", init=False)
+    _arrays: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @classmethod
     def from_data(cls) -> FreyLawAvin:
@@ -115,12 +120,23 @@ class FreyLawAvin:
             parameters.regional(self.table, prefix, region, "b1"),
         )
 
-    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
-        """Endurance time [s] of each load [%MVC] for the muscle groups of ``region``."""
-        b0, b1 = self._coefficients(region)
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: Regions) -> np.ndarray:
+        """Endurance time [s] of each load [%MVC] for the muscle groups of ``region`` (one
+        region, or one per load)."""
+        b0, b1 = self._values(region)
         fraction = np.asarray(load_pct_mvc, dtype=float) / PERCENT
         positive = fraction > 0
-        return np.where(positive, b0.value * np.where(positive, fraction, 1.0) ** b1.value, np.inf)
+        return np.where(positive, b0 * np.where(positive, fraction, 1.0) ** b1, np.inf)
+
+    def _values(self, region: Regions) -> tuple[np.ndarray, np.ndarray]:
+        """The numbers ``b0`` and ``b1`` of ``region``, or of each region (looked up once)."""
+        key = region if isinstance(region, str) else tuple(region)
+        if key not in self._arrays:
+            names = [key] if isinstance(key, str) else key
+            pairs = [self._coefficients(name) for name in names]
+            b0, b1 = (np.array([pair[i].value for pair in pairs]) for i in (0, 1))
+            self._arrays[key] = (b0[0], b1[0]) if isinstance(key, str) else (b0, b1)
+        return self._arrays[key]
 
     def expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> ca.SX:
         """``b0·f^b1`` [s] of ``region``, ``f = T_N/100 > 0``."""
@@ -153,7 +169,7 @@ class Rohmert:
             sustainable_level=_data("rohmert.sustainable_level"),
         )
 
-    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: str) -> np.ndarray:
+    def endurance_time_s(self, load_pct_mvc: ArrayLike, region: Regions) -> np.ndarray:
         """Endurance time [s] of each load [%MVC]; ``region`` is ignored."""
         load = np.asarray(load_pct_mvc, dtype=float)
         held = load > self.sustainable_level.value

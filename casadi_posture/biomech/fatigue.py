@@ -143,10 +143,6 @@ class HoldingTimeFatigue:
         self._rest_multiplier = _data("rest_multiplier")
         self._recovery_rates = _region_rates(self.regions, "recovery_rate")
         self._recovery_rate = _per_half_joint(self.regions, self._recovery_rates)
-        names = np.array(self.regions, dtype=object)
-        self._half_joints = {
-            region: np.flatnonzero(names == region) for region in dict.fromkeys(self.regions)
-        }
 
     def initial_state(self) -> np.ndarray:
         """Zero fatigue for every half-joint, shape (n,)."""
@@ -168,9 +164,7 @@ class HoldingTimeFatigue:
 
     def _growth(self, load: np.ndarray) -> np.ndarray:
         """``[T_N > T_0]/ET`` [1/s] of every half-joint."""
-        endurance_s = np.empty_like(load)
-        for region, index in self._half_joints.items():
-            endurance_s[index] = self.endurance.endurance_time_s(load[index], region)
+        endurance_s = self.endurance.endurance_time_s(load, self.regions)
         return np.where(load > self._threshold.value, 1.0 / endurance_s, 0.0)
 
     def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:

@@ -3,6 +3,7 @@ compiled CasADi call; and the linear inequality ``aᵀq ≤ b`` that sits above 
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -71,6 +72,13 @@ class TaskHierarchy:
             [f"e{k + 1}" for k in range(len(self.levels))]
             + [f"J{k + 1}" for k in range(len(self.levels))],
         )
+
+    def copy(self) -> TaskHierarchy:
+        """The same compiled hierarchy with target values of its own (a run sets some in
+        place: the whole-body adjustment's effort weights)."""
+        other = copy.copy(self)
+        other.targets = self.targets.copy()
+        return other
 
     def offset(self, task: Task) -> int:
         """Where ``task``'s parameters start in ``targets``."""
