@@ -117,7 +117,14 @@ def limiting(groups: Sequence[GroupLoad]) -> GroupLoad | None:
     finite = [g for g in groups if math.isfinite(g.endurance_s)]
     if not finite:
         return None
-    return min(finite, key=lambda g: (g.endurance_s, -g.load_pct_mvc))
+    return min(finite, key=lambda g: limiting_key(g.endurance_s, g.load_pct_mvc))
+
+
+def limiting_key(endurance: float, load_pct_mvc: float) -> tuple[float, float]:
+    """The order of groups by which limits first: the shorter endurance, then the higher
+    load, each to 9 significant digits, so that the two sides of a symmetric task, equal but
+    for round-off, tie and the first in body order (the right) is named."""
+    return float(f"{endurance:.9g}"), -float(f"{load_pct_mvc:.9g}")
 
 
 def law(problem: Problem) -> str:

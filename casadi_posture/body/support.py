@@ -93,8 +93,22 @@ def reaction_torque(
     force = -share * total
     arm = ca.vertcat(offset, -centre[2])
     couple = ca.vertcat(0.0, 0.0, -share * twist)
-    torque = body.jacobian(centre).T @ force
-    return torque + body.angular_jacobian(foot.dof).T @ (ca.cross(arm, force) + couple)
+    # On each DOF up the foot's chain: a_j · ((centre − o_j) × force + arm × force + couple),
+    # written out rather than through the Jacobians of the centre and the foot's frame,
+    # which the comfort level would differentiate again (three times the instructions).
+    about = ca.cross(arm, force) + couple
+    chain = set(body.ancestors(foot.dof))
+    return ca.vertcat(
+        *[
+            ca.dot(
+                body.joint_axis(d.name),
+                ca.cross(centre - body.joint_centre(d.name), force) + about,
+            )
+            if d.name in chain
+            else ca.SX(0.0)
+            for d in body.dofs
+        ]
+    )
 
 
 def floor_pressure(

@@ -238,6 +238,14 @@ class BodyModel:
             dof = self.dofs[self.index[dof]].parent
         return chain[::-1]
 
+    def joint_centre(self, dof: str) -> ca.SX:
+        """World position [m] of the centre of ``dof``."""
+        return self._origin[dof]
+
+    def joint_axis(self, dof: str) -> ca.SX:
+        """World direction of the axis of ``dof`` (unit)."""
+        return self._rotation[dof] @ ca.DM(self.axis(dof))
+
     def rotation(self, dof: str | None) -> ca.SX:
         """Orientation of the frame of ``dof`` in the world (3×3, SX)."""
         return self._rotation[dof]

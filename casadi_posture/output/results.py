@@ -29,7 +29,7 @@ from casadi_posture.output.plain import dumps
 from casadi_posture.output.scores import run_report, step_scores
 from casadi_posture.output.scores import timeline_columns as score_columns
 from casadi_posture.simulation import SimulationResult
-from casadi_posture.static import endurance, plausibility, rule
+from casadi_posture.static import endurance, limiting_key, plausibility, rule
 
 #: Recovery postures listed on screen; summary.json has them all.
 SHOWN_RECOVERIES = 5
@@ -78,7 +78,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
             for g in groups
             if g["initial_endurance_min"] is not None and math.isfinite(g["initial_endurance_min"])
         ),
-        key=lambda g: (g["initial_endurance_min"], -g["initial_load_pct_mvc"]),
+        key=lambda g: limiting_key(g["initial_endurance_min"], g["initial_load_pct_mvc"]),
         default=None,
     )
     if result.recording is not None:

@@ -15,7 +15,7 @@ from casadi_posture.output.results import summary
 from casadi_posture.output.scores import row as score_row
 from casadi_posture.output.scores import worst
 from casadi_posture.simulation import SimulationResult
-from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, at_posture
+from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, at_posture, limiting_key
 
 
 def static_row(answer: StaticAnswer) -> dict[str, Any]:
@@ -149,7 +149,9 @@ def _endurance(
         row[f"initial_load_{name}_pct_mvc"] = load
         row[f"initial_endurance_{name}_min"] = seconds / 60
     tiring = [name for name, (_, seconds) in groups.items() if math.isfinite(seconds)]
-    limiting = min(tiring, key=lambda n: (groups[n][1], -(groups[n][0] or 0.0)), default=None)
+    limiting = min(
+        tiring, key=lambda n: limiting_key(groups[n][1], groups[n][0] or 0.0), default=None
+    )
     over = [name for name, (load, _) in groups.items() if (load or 0.0) > STRENGTH_PCT_MVC]
     return row | {
         "over_strength_at_start": "+".join(over),
