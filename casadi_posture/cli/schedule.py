@@ -217,8 +217,29 @@ def answer_lines(cycle: DutyCycle) -> list[str]:
             f"reaches it{where}",
             _duty_line(cycle),
         ]
+    guideline = cycle.guideline()
+    if guideline is not None and verdict != "never_held":
+        lines.append(potvin_line(guideline, cycle.duty_cycle_pct))
     lines.append(f"{len(cycle.trials)} simulations, {cycle.wall_time_s:.2f} s wall")
     return lines + [f"FLAGGED: {flag}" for flag in cycle.flags]
+
+
+def potvin_line(guideline: dict, duty_cycle_pct: float | None) -> str:
+    """Potvin's guideline beside our duty cycle, in words."""
+    line = (
+        f"Potvin 2012 (the effort workers accept for a shift, upper-limb tasks, ±"
+        f"{guideline['rms_difference_pct_mvc']:g} %MVC): {guideline['half_joint']} carries "
+        f"{guideline['effort_pct_mvc']:.1f} %MVC, acceptable up to a "
+        f"{guideline['acceptable_duty_cycle_pct']:.1f} % duty cycle"
+    )
+    if duty_cycle_pct is not None and guideline["acceptable_effort_at_duty_cycle_pct_mvc"]:
+        line += (
+            f"; at our {duty_cycle_pct:.1f} % it accepts "
+            f"{guideline['acceptable_effort_at_duty_cycle_pct_mvc']:.1f} %MVC"
+        )
+    if not guideline["region_in_guideline_data"]:
+        line += f" (the {guideline['region']} is outside the guideline's data)"
+    return line
 
 
 def _duty_line(cycle: DutyCycle) -> str:

@@ -30,7 +30,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
+
 from casadi_posture import interrupt
+from casadi_posture.ergonomics.acceptable_effort import Guideline
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.solvers import check_solver
 from casadi_posture.output.plain import dumps
@@ -73,6 +76,16 @@ class Trial:
 
 
 @dataclass(frozen=True)
+class Effort:
+    """The effort of a hold, for Potvin's guideline (ergonomics/acceptable_effort.py): the
+    most loaded group on the first hold step, its load [%MVC] and joint region."""
+
+    half_joint: str
+    region: str
+    load_pct_mvc: float
+
+
+@dataclass(frozen=True)
 class DutyCycle:
     """The sustainable duty cycle of a problem for one rest time.
 
@@ -94,6 +107,7 @@ class DutyCycle:
     failing_t_on_s: float | None
     trials: list[Trial]
     wall_time_s: float
+    effort: Effort | None = None
     runs: dict[str, SimulationResult] = field(default_factory=dict, repr=False)
 
     @property
@@ -153,9 +167,32 @@ class DutyCycle:
             )
         return out
 
+    def guideline(self) -> dict[str, Any] | None:
+        """Potvin's (2012) shift-long guideline beside the answer: the hold's effort, the
+        largest duty cycle [%] the guideline accepts for it, the effort [%MVC] it accepts at
+        our sustainable duty cycle, and whether its upper-limb data cover the group's region
+        (None without a held step)."""
+        if self.effort is None:
+            return None
+        rule = Guideline.from_data()
+        ours = self.duty_cycle_pct
+        return {
+            "source": "Potvin 2012, Human Factors 54(2):175-188: MAE = 1 - (DC - 1/28800)^0.24",
+            "half_joint": self.effort.half_joint,
+            "region": self.effort.region,
+            "effort_pct_mvc": self.effort.load_pct_mvc,
+            "acceptable_duty_cycle_pct": rule.duty_cycle_pct(self.effort.load_pct_mvc),
+            "acceptable_effort_at_duty_cycle_pct_mvc": (
+                None if ours is None else rule.mae_pct_mvc(ours)
+            ),
+            "region_in_guideline_data": rule.covers(self.effort.region),
+            "rms_difference_pct_mvc": rule.rms_difference_pct_mvc,
+        }
+
     def summary(self) -> dict[str, Any]:
         """The search as plain data (duty_cycle.json): settings, verdict, bracket, duty
-        cycle [%], every trial, the wall time [s] and the flags."""
+        cycle [%], Potvin's guideline beside it, every trial, the wall time [s] and the
+        flags."""
         return {
             "problem": self.problem,
             "t_off_s": self.t_off_s,
@@ -171,6 +208,7 @@ class DutyCycle:
             "duty_cycle_pct": self.duty_cycle_pct,
             "duty_cycle_bracket_pct": self.duty_cycle_bracket_pct,
             "bracket_limited_by_time_step": self.step_limited,
+            "guideline": self.guideline(),
             "simulations": len(self.trials),
             "wall_time_s": self.wall_time_s,
             "trials": [t.__dict__ for t in self.trials],
@@ -271,6 +309,7 @@ def duty_cycle(
             None if fail is None else fail * dt,
             trials,
             time.perf_counter() - start,
+            _effort(results[steps]) if steps in results else None,
             {label: results[n] for label, n in ends if n is not None},
         )
 
@@ -303,6 +342,17 @@ def duty_cycle(
                 return answer("interrupted", ok, fail)
             ok, fail = (ok, middle) if reached else (middle, fail)
         return answer("bracketed", ok, fail)
+
+
+def _effort(result: SimulationResult) -> Effort | None:
+    """The most loaded group on the run's first hold step (None: no hold step)."""
+    held = [k for k, phase in enumerate(result.timeline.phase) if phase == "hold"]
+    if not held:
+        return None
+    loads = result.timeline.load[held[0]]
+    group = int(np.argmax(loads))
+    half = result.problem.body.half_joints[group]
+    return Effort(half.name, half.region, float(loads[group]))
 
 
 def duty_cycles(
@@ -345,12 +395,23 @@ def table_columns(cycles: Sequence[DutyCycle]) -> dict[str, list[Any]]:
             None if c.duty_cycle_bracket_pct is None else c.duty_cycle_bracket_pct[1]
             for c in cycles
         ],
+        "effort_group": [None if c.effort is None else c.effort.half_joint for c in cycles],
+        "effort_pct_mvc": [None if c.effort is None else c.effort.load_pct_mvc for c in cycles],
+        "potvin_duty_cycle_pct": [_guide(c, "acceptable_duty_cycle_pct") for c in cycles],
+        "potvin_effort_at_duty_cycle_pct_mvc": [
+            _guide(c, "acceptable_effort_at_duty_cycle_pct_mvc") for c in cycles
+        ],
         "horizon_s": [c.horizon_s for c in cycles],
         "tolerance_s": [c.tolerance_s for c in cycles],
         "simulations": [len(c.trials) for c in cycles],
         "wall_time_s": [c.wall_time_s for c in cycles],
         "flags": ["; ".join(c.flags) for c in cycles],
     }
+
+
+def _guide(cycle: DutyCycle, key: str) -> float | None:
+    guideline = cycle.guideline()
+    return None if guideline is None else guideline[key]
 
 
 def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
