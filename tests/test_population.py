@@ -185,3 +185,38 @@ def test_the_survival_curve_drops_at_once_for_a_worker_who_never_held() -> None:
     assert counts == [3, 1, 1]  # after 0 s, after 10 s, still holding at the end
     _, counts = survival_steps(held, np.zeros(4, dtype=bool), 20.0)
     assert counts == [3, 1, 0]  # the last one gave out at the end of its own run
+
+
+def test_the_share_for_whom_a_schedule_is_sustainable(tmp_path) -> None:
+    """3 workers per sex on the 2-DOF arm with 6 kg, 10 s on and 20 s off, for 5 minutes:
+    population.json counts as sustainable the workers whose run went the whole 300 s with
+    no group at the fatigue threshold, which summary.csv's per-group threshold times say
+    by themselves; with its Wilson interval, on the console too."""
+    import csv
+    import json
+
+    from casadi_posture.people.statistics import wilson
+
+    schedule = ["--set", "schedule.t_on_s=10", "--set", "schedule.t_off_s=20"]
+    result, out = _population(
+        tmp_path, "--set", "simulation.duration_s=300", "--set", "loads[0].mass_kg=6", *schedule
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "population.json").read_text())
+    assert summary["schedule"] == {"t_on_s": 10.0, "t_off_s": 20.0}
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    counts = []
+    for sex, data in summary["sexes"].items():
+        mine = [r for r in rows if r["body.sex"] == sex]
+        never = [
+            r
+            for r in mine
+            if r["stop"] == "completed"
+            and all(v == "" for k, v in r.items() if k.startswith("fatigue_threshold_"))
+        ]
+        kept = data["sustainable"]
+        assert (kept["n"], kept["count"]) == (3, len(never))
+        assert (kept["low"], kept["high"]) == pytest.approx(wilson(len(never), 3))
+        assert "sustainable on its schedule for the whole 300 s" in result.output
+        counts.append(len(never))
+    assert 0 < sum(counts) < 6, "the load must split the workers for the test to bite"

@@ -122,6 +122,16 @@ def population(
             )
             rows.append([sex["people"], share["minutes"], share["n"], shown])
     click.echo(table(["workers", "at (min)", "n", "still holding (95 % interval)"], rows))
+    schedule = "on its schedule " if report.summary["schedule"] else ""
+    for sex in report.summary["sexes"].values():
+        kept = sex["sustainable"]
+        if kept["share"] is not None:
+            click.echo(
+                f"{sex['people']}: sustainable {schedule}for the whole "
+                f"{report.summary['horizon_s']:g} s (no group at the fatigue threshold): "
+                f"{kept['count']} of {kept['n']}, {100 * kept['share']:.0f} % "
+                f"({100 * kept['low']:.0f}-{100 * kept['high']:.0f} %)"
+            )
     for sex in report.summary["sexes"].values():
         gave_out = ", ".join(f"{k} {v}" for k, v in sorted(sex["exhausted_region"].items()))
         click.echo(f"{sex['people']}: the region that gave out: {gave_out}")

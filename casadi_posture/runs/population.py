@@ -108,14 +108,32 @@ def shares(
     return out
 
 
+def sustainable(rows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """Of the workers that ran (``rows`` of one sex), how many held the task, with its
+    schedule if it has one, for the whole run without any group reaching the fatigue
+    threshold (the constraint never engaged): ``duty-cycle``'s "sustainable", per
+    person; a proportion and its Wilson 95 % interval (None: nobody ran)."""
+    ran = [r for r in rows if r.get("status") in ("ok", "flagged")]
+    count = sum(r.get("stop") == "completed" and r.get("first_fatigue_s") is None for r in ran)
+    low, high = wilson(count, len(ran)) if ran else (None, None)
+    return {
+        "n": len(ran),
+        "count": count,
+        "share": count / len(ran) if ran else None,
+        "low": low,
+        "high": high,
+    }
+
+
 def population_summary(
     report: BatchReport, workers: Sequence[Worker], fixed: Sequence[str]
 ) -> dict[str, Any]:
     """What population.json holds: per sex the workers drawn, run, failed and flagged (an
     answer that needs care, over strength at the start say: their rows say why), the shares
-    still holding at ``HORIZONS_MIN`` with their intervals, the median time held [s], the
-    regions that gave out first and the limiting regions at the start, counted; the groups
-    not varied."""
+    still holding at ``HORIZONS_MIN`` with their intervals, the share for whom the task (on
+    its schedule) is sustainable over the whole run, the median time held [s], the regions
+    that gave out first and the limiting regions at the start, counted; the groups not
+    varied."""
     by_name = {w.name: w for w in workers}
     out: dict[str, Any] = {"groups_not_varied": list(fixed), "sexes": {}}
     for sex in SEXES:
@@ -131,6 +149,7 @@ def population_summary(
             "failed": len(rows) - len(ran),
             "flagged": sum(r.get("status") == "flagged" for r in rows),
             "still_holding": [s.__dict__ for s in shares(rows)],
+            "sustainable": sustainable(rows),
             "median_task_held_s": held[len(held) // 2] if held else None,
             "exhausted_region": dict(Counter(r["exhausted_region"] or "none" for r in ran)),
             "limiting_region_at_start": dict(
@@ -210,6 +229,8 @@ def run_population(
         "group_correlation": rho,
         "solver": solver,
         "overrides": given,
+        "horizon_s": problem.spec.simulation.duration_s,
+        "schedule": None if problem.spec.schedule is None else problem.spec.schedule.model_dump(),
     }
     batch = run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
