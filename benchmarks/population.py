@@ -1,0 +1,86 @@
+"""Throughput of a population run on one and on two worker processes (not a test).
+
+Run: python benchmarks/population.py [--n N] [--problem FILE] [--jobs J]
+
+Draws N workers per sex (both sexes, seed 1) for the problem (default: the standing wall
+hold, 29 DOF, the largest body with a population-ready task) and runs them as
+``cp.population`` does, without files per worker: first in this process (one core), then on
+J worker processes. Prints per run the wall time, the workers per minute, the seconds per
+worker, the speed-up over one core, the time 1000 workers would take at that rate, and the
+largest resident memory of a worker process. Targets (issue 24): 1000 workers in at most
+10 minutes on 2 cores, at least 1.8 times one core's throughput, at most 300 MB per worker.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from casadi_posture import api
+from casadi_posture.output.report import table
+
+PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
+
+
+def run(problem: Path, n: int, jobs: int) -> float:
+    """Wall time [s] of a population of ``n`` workers per sex on ``jobs`` processes."""
+    with tempfile.TemporaryDirectory() as folder:
+        start = time.perf_counter()
+        report = api.population(problem, Path(folder) / "out", n=n, jobs=jobs, seed=1)
+        elapsed = time.perf_counter() - start
+    failed = sum(r.get("status") == "failed" for r in report.batch.rows)
+    if failed:
+        print(f"warning: {failed} workers failed", file=sys.stderr)
+    return elapsed
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=10, help="workers per sex (default 10)")
+    parser.add_argument("--problem", type=Path, default=PROBLEMS / "standing_wall_horizontal.toml")
+    parser.add_argument("--jobs", type=int, default=2, help="worker processes (default 2)")
+    args = parser.parse_args()
+    workers = 2 * args.n
+    rows = []
+    one = run(args.problem, args.n, 1)
+    own_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    many = run(args.problem, args.n, args.jobs)
+    child_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    for jobs, wall, memory in ((1, one, own_mb), (args.jobs, many, child_mb)):
+        rows.append(
+            [
+                jobs,
+                workers,
+                wall,
+                60 * workers / wall,
+                wall / workers,
+                one / wall,
+                1000 * wall / workers / 60,
+                memory,
+            ]
+        )
+    print(f"{args.problem.name}: {args.n} workers per sex, seed 1, no files per worker")
+    print(
+        table(
+            [
+                "processes",
+                "workers",
+                "wall (s)",
+                "workers per min",
+                "s per worker",
+                "speed-up",
+                "1000 workers (min)",
+                "peak memory of a process (MB)",
+            ],
+            rows,
+            digits=3,
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()
