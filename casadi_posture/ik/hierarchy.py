@@ -4,6 +4,7 @@ compiled CasADi call; and the linear inequality ``aᵀq ≤ b`` that sits above 
 from __future__ import annotations
 
 import copy
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -11,6 +12,7 @@ import casadi as ca
 import numpy as np
 
 from casadi_posture.body.tree import BodyModel
+from casadi_posture.compiled import Compiled
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.tasks import Comfort, JointReference, Task
 
@@ -63,6 +65,7 @@ class TaskHierarchy:
             self.residuals.append(ca.vertcat(*parts))
             self.blocks.append(blocks)
         self.jacobians = [ca.jacobian(e, body.q) for e in self.residuals]
+        self._residuals: Compiled | None = None
         self.sizes = [e.numel() for e in self.residuals]
         self.function = ca.Function(
             "levels",
@@ -114,6 +117,13 @@ class TaskHierarchy:
         return self.body.n - int(np.linalg.matrix_rank(stacked, tol=1e-9))
 
     def residual_norms(self, q: np.ndarray) -> np.ndarray:
-        """‖e_k(q)‖ of every level (task units)."""
-        out = self.function(q, self.targets)
-        return np.array([float(ca.norm_2(out[k])) for k in range(self.depth)])
+        """‖e_k(q)‖ of every level (task units), by a compiled call of the residuals alone
+        (built at the first call; one hierarchy per thread)."""
+        if self._residuals is None:
+            stacked = ca.densify(ca.vertcat(*self.residuals))
+            self._residuals = Compiled(
+                ca.Function("residuals", [self.body.q, self.p], [stacked], ["q", "p"], ["e"])
+            )
+        e = self._residuals(q=q, p=self.targets)["e"]
+        ends = np.cumsum([0, *self.sizes])
+        return np.array([np.linalg.norm(e[a:b]) for a, b in itertools.pairwise(ends)])
