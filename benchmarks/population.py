@@ -8,8 +8,9 @@ hold, 29 DOF, the largest body with a population-ready task) and runs them as
 J worker processes. Prints per run the wall time, the workers per minute, the seconds per
 worker, the speed-up over one core, the time 1000 workers would take at that rate, and the
 largest resident memory of the process that ran the workers (this one, then each worker
-process, sampled with psutil, which the dask extra installs). Targets (issue 24): 1000 workers in at most
-10 minutes on 2 cores, at least 1.8 times one core's throughput, at most 300 MB per worker.
+process, sampled with psutil, which the dask extra installs). Targets (issue 24): 1000
+workers in at most 10 minutes on 2 cores, at least 1.8 times one core's throughput, at most
+300 MB per worker.
 """
 
 from __future__ import annotations
