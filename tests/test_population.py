@@ -217,6 +217,8 @@ def test_the_share_for_whom_a_schedule_is_sustainable(tmp_path) -> None:
         kept = data["sustainable"]
         assert (kept["n"], kept["count"]) == (3, len(never))
         assert (kept["low"], kept["high"]) == pytest.approx(wilson(len(never), 3))
-        assert "sustainable on its schedule for the whole 300 s" in result.output
+        assert "sustainable, on its schedule, for the whole 300 s" in result.output
+        people = {"male": "men", "female": "women"}[sex]
+        assert f"{people} {len(never)} of 3," in result.output
         counts.append(len(never))
     assert 0 < sum(counts) < 6, "the load must split the workers for the test to bite"

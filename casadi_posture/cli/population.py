@@ -122,16 +122,18 @@ def population(
             )
             rows.append([sex["people"], share["minutes"], share["n"], shown])
     click.echo(table(["workers", "at (min)", "n", "still holding (95 % interval)"], rows))
-    schedule = "on its schedule " if report.summary["schedule"] else ""
-    for sex in report.summary["sexes"].values():
-        kept = sex["sustainable"]
-        if kept["share"] is not None:
-            click.echo(
-                f"{sex['people']}: sustainable {schedule}for the whole "
-                f"{report.summary['horizon_s']:g} s (no group at the fatigue threshold): "
-                f"{kept['count']} of {kept['n']}, {100 * kept['share']:.0f} % "
-                f"({100 * kept['low']:.0f}-{100 * kept['high']:.0f} %)"
-            )
+    kept = [
+        f"{sex['people']} {k['count']} of {k['n']}, {100 * k['share']:.0f} % "
+        f"({100 * k['low']:.0f}-{100 * k['high']:.0f} %)"
+        for sex in report.summary["sexes"].values()
+        if (k := sex["sustainable"])["share"] is not None
+    ]
+    if kept:
+        schedule = ", on its schedule," if report.summary["schedule"] else ""
+        click.echo(
+            f"sustainable{schedule} for the whole {report.summary['horizon_s']:g} s (no group "
+            f"ever at the fatigue threshold):\n  {'; '.join(kept)}"
+        )
     for sex in report.summary["sexes"].values():
         gave_out = ", ".join(f"{k} {v}" for k, v in sorted(sex["exhausted_region"].items()))
         click.echo(f"{sex['people']}: the region that gave out: {gave_out}")

@@ -227,9 +227,9 @@ def answer_lines(cycle: DutyCycle) -> list[str]:
 def potvin_line(guideline: dict, duty_cycle_pct: float | None) -> str:
     """Potvin's guideline beside our duty cycle, in words."""
     line = (
-        f"Potvin 2012 (the effort workers accept for a shift, upper-limb tasks, ±"
-        f"{guideline['rms_difference_pct_mvc']:g} %MVC): {guideline['half_joint']} carries "
-        f"{guideline['effort_pct_mvc']:.1f} %MVC, acceptable up to a "
+        f"Potvin 2012, the effort workers accept for a shift (upper-limb tasks, ±"
+        f"{guideline['rms_difference_pct_mvc']:g} %MVC):\n  {guideline['half_joint']} at "
+        f"{guideline['effort_pct_mvc']:.1f} %MVC is acceptable up to a "
         f"{guideline['acceptable_duty_cycle_pct']:.1f} % duty cycle"
     )
     if duty_cycle_pct is not None and guideline["acceptable_effort_at_duty_cycle_pct_mvc"]:
