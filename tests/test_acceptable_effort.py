@@ -73,3 +73,18 @@ def test_the_duty_cycle_search_sets_the_guideline_beside_its_answer() -> None:
         RULE.mae_pct_mvc(found.duty_cycle_pct)
     )
     assert guide["region_in_guideline_data"] == (found.effort.region in RULE.regions)
+
+
+def test_no_duty_cycle_has_no_acceptable_effort_at_it_and_a_tie_names_the_right() -> None:
+    """20 kg is over the arm's strength: no duty cycle works, so the guideline has no effort
+    'at our duty cycle' to give (not the 100 %MVC of a 0 % duty cycle). The shelf's
+    symmetric hold loads both shoulders alike: the right, first in the body, is named."""
+    heavy = load_problem(PROBLEMS / "holding_horizontal.toml", {"loads[0].mass_kg": 20.0})
+    none = duty_cycle(heavy, 30.0, horizon_s=120.0)
+    assert none.verdict == "none" and none.effort.load_pct_mvc > 100
+    guide = none.guideline()
+    assert guide["acceptable_effort_at_duty_cycle_pct_mvc"] is None
+    assert guide["acceptable_duty_cycle_pct"] == pytest.approx(100.0 / 28800)
+    shelf = load_problem(PROBLEMS / "standing_shelf_box.toml")
+    found = duty_cycle(shelf, 30.0, horizon_s=120.0, precision=1.0)
+    assert found.effort.half_joint == "shoulder_flexors_r"

@@ -232,7 +232,7 @@ def potvin_line(guideline: dict, duty_cycle_pct: float | None) -> str:
         f"{guideline['effort_pct_mvc']:.1f} %MVC is acceptable up to a "
         f"{guideline['acceptable_duty_cycle_pct']:.1f} % duty cycle"
     )
-    if duty_cycle_pct is not None and guideline["acceptable_effort_at_duty_cycle_pct_mvc"]:
+    if guideline["acceptable_effort_at_duty_cycle_pct_mvc"] is not None:
         line += (
             f"; at our {duty_cycle_pct:.1f} % it accepts "
             f"{guideline['acceptable_effort_at_duty_cycle_pct_mvc']:.1f} %MVC"

@@ -170,8 +170,8 @@ class DutyCycle:
     def guideline(self) -> dict[str, Any] | None:
         """Potvin's (2012) shift-long guideline beside the answer: the hold's effort, the
         largest duty cycle [%] the guideline accepts for it, the effort [%MVC] it accepts at
-        our sustainable duty cycle, and whether its upper-limb data cover the group's region
-        (None without a held step)."""
+        our sustainable duty cycle (None when none is), and whether its upper-limb data
+        cover the group's region (None without a held step)."""
         if self.effort is None:
             return None
         rule = Guideline.from_data()
@@ -182,8 +182,8 @@ class DutyCycle:
             "region": self.effort.region,
             "effort_pct_mvc": self.effort.load_pct_mvc,
             "acceptable_duty_cycle_pct": rule.duty_cycle_pct(self.effort.load_pct_mvc),
-            "acceptable_effort_at_duty_cycle_pct_mvc": (
-                None if ours is None else rule.mae_pct_mvc(ours)
+            "acceptable_effort_at_duty_cycle_pct_mvc": (  # none when no duty cycle works
+                rule.mae_pct_mvc(ours) if ours else None
             ),
             "region_in_guideline_data": rule.covers(self.effort.region),
             "rms_difference_pct_mvc": rule.rms_difference_pct_mvc,
@@ -350,7 +350,8 @@ def _effort(result: SimulationResult) -> Effort | None:
     if not held:
         return None
     loads = result.timeline.load[held[0]]
-    group = int(np.argmax(loads))
+    # to 9 digits: of the two sides of a symmetric task, equal but for round-off, the first
+    group = int(np.argmax([float(f"{load:.9g}") for load in loads]))
     half = result.problem.body.half_joints[group]
     return Effort(half.name, half.region, float(loads[group]))
 
