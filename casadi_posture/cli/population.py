@@ -80,13 +80,17 @@ def population(
     """Simulate N virtual workers of each sex holding the problem's task, each on a body of
     their own sex, stature and mass (ANSUR II) and strengths (the shipped spreads), and
     print the share of each sex still holding it at 1, 2, 5, 10 and 20 minutes with 95 %
-    intervals. Writes summary.csv (a row per worker), population.json, survival.png and
-    held_vs_stature.png; resumable like batch. Exit code 1 when a worker's run failed,
-    2 on bad input, 130 on Ctrl-C (finished workers are kept; rerun with --resume).
+    intervals, and the share for whom it is sustainable (on the file's [schedule], if any:
+    no group ever at the fatigue threshold). Writes summary.csv (a row per worker),
+    population.json, survival.png and held_vs_stature.png; resumable like batch. Exit
+    code 1 when a worker's run failed, 2 on bad input, 130 on Ctrl-C (finished workers
+    are kept; rerun with --resume).
 
     \b
     Example:
       casadi-posture population problems/standing_wall_horizontal.toml --n 50 --jobs 2
+      casadi-posture population problems/standing_wall_horizontal.toml --n 20 \\
+          --set schedule.t_on_s=60 --set schedule.t_off_s=30
     """
     out = out or Path("out", "population", Path(problem).stem)
     report = api.population(

@@ -104,10 +104,11 @@ def duty_cycle(
     engage) within the horizon, found by bisection over simulations of the schedule.
 
     Prints every simulation, the bracket (the longest hold found below the threshold and
-    the shortest found to reach it), the duty cycle t_on/(t_on + t_off) in %, the number
-    of simulations and the wall time. Exit code 1 when the answer cannot be used as it is
-    (the task never held, IK failures), 130 on Ctrl-C (the bracket found so far is
-    printed).
+    the shortest found to reach it), the duty cycle t_on/(t_on + t_off) in %, beside it
+    Potvin's (2012) shift-long guideline of acceptable effort against duty cycle (for the
+    most loaded group's effort), the number of simulations and the wall time. Exit code 1
+    when the answer cannot be used as it is (the task never held, IK failures), 130 on
+    Ctrl-C (the bracket found so far is printed).
 
     \b
     Example:
