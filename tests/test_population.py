@@ -40,6 +40,88 @@ def test_the_workers_have_the_survey_s_stature_and_mass(many: list, sex: str) ->
     assert np.corrcoef(stature, mass)[0, 1] == pytest.approx(r, abs=0.02)
 
 
+#: ANSUR II's subjects of 18 and over, as docs/population.md gives them: the mean and median
+#: age in whole years, and the normal-score correlations of age with stature and ln mass.
+SURVEY_AGES = {"male": (30.16, 28.0, -0.0026, 0.2691), "female": (28.95, 27.0, 0.0314, 0.2239)}
+
+
+def _normal_scores(x: np.ndarray) -> np.ndarray:
+    from statistics import NormalDist
+
+    ranks = np.empty(x.size)
+    ranks[np.argsort(x, kind="stable")] = np.arange(1, x.size + 1)
+    return np.array([NormalDist().inv_cdf(p) for p in (ranks - 0.5) / x.size])
+
+
+@pytest.mark.parametrize("sex", ["male", "female"])
+def test_the_workers_have_the_survey_s_ages_and_their_correlations(many: list, sex: str) -> None:
+    """20 000 of each sex: the whole years of their ages have the survey's mean (within 4
+    standard errors) and median, every age lies in the survey's 18 to 58 (and the year
+    after the last birthday), each year's share is the survey's within 4 standard errors,
+    and the normal-score correlations of age with stature and ln mass are the survey's
+    within 0.03."""
+    from casadi_posture.people.sampling import ages
+
+    workers = [w for w in many if w.sex == sex]
+    age = np.array([w.age_years for w in workers])
+    years = np.floor(age)
+    mean, median, with_stature, with_mass = SURVEY_AGES[sex]
+    assert abs(years.mean() - mean) < 4 * years.std() / np.sqrt(years.size)
+    assert np.median(years) == median
+    assert age.min() >= 18.0 and age.max() < 59.0
+    first, share = ages(sex)
+    drawn = np.bincount(years.astype(int) - first, minlength=share.size) / years.size
+    error = np.sqrt(share * (1 - share) / years.size)
+    assert (np.abs(drawn - share) <= 4 * error + 1e-4).all()
+    scores = [
+        _normal_scores(np.array(v))
+        for v in ([w.stature_m for w in workers], np.log([w.mass_kg for w in workers]), age)
+    ]
+    assert np.corrcoef(scores[0], scores[2])[0, 1] == pytest.approx(with_stature, abs=0.03)
+    assert np.corrcoef(scores[1], scores[2])[0, 1] == pytest.approx(with_mass, abs=0.03)
+
+
+def test_an_age_s_quantile_falls_in_its_year() -> None:
+    """The quantile at the top of a year's share is the end of that year; just above the
+    share below it, its start; halfway through the share, its middle."""
+    from casadi_posture.people.sampling import age_at, ages
+
+    first, share = ages("female")
+    cdf = np.cumsum(share)
+    got = age_at("female", np.array([share[0] / 2, cdf[0], cdf[4] + 1e-12, cdf[4] + share[5] / 2]))
+    np.testing.assert_allclose(got, [first + 0.5, first + 1.0, first + 5.0, first + 5.5], atol=1e-6)
+
+
+def test_a_worker_s_age_weakens_their_strength_as_the_decline_says() -> None:
+    """Two of the wall hold's workers, the same but for age: the older's knee extensors
+    (Anderson 2007's young adults' strength) are weaker by the ratio of the shipped age
+    decline's factors, and the elbow flexors by Harbo 2012's regression in age."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from casadi_posture.biomech.strength import age_factor, elbow_flexion
+    from casadi_posture.problem import load_problem
+    from casadi_posture.runs.population import draw, worker_cases
+
+    path = Path(__file__).resolve().parents[1] / "problems" / "standing_wall_horizontal.toml"
+    problem = load_problem(path)
+    worker = draw(problem, 1, ("female",), seed=1)[0]
+    young, old = replace(worker, age_years=25.0), replace(worker, age_years=55.0)
+    cases, _ = worker_cases(problem, path.read_text(), [young, old], None, False)
+    assert [c.overrides["body.age_years"] for c in cases] == [25.0, 55.0]
+    q = problem.posture
+    strengths = [load_problem(path, c.overrides).torque_model().evaluate(q).strength for c in cases]
+    names = [h.name for h in problem.body.half_joints]
+    knee, elbow = names.index("knee_extensors_r"), names.index("elbow_flexors_r")
+    ratio = age_factor("female", 55.0)[0] / age_factor("female", 25.0)[0]
+    assert ratio < 1
+    assert strengths[1][knee] / strengths[0][knee] == pytest.approx(ratio, rel=1e-9)
+    size = (worker.stature_m, worker.mass_kg)
+    harbo = elbow_flexion("female", *size, 55.0)[0] / elbow_flexion("female", *size, 25.0)[0]
+    assert harbo < 1
+    assert strengths[1][elbow] / strengths[0][elbow] == pytest.approx(harbo, rel=1e-3)
+
+
 @pytest.mark.parametrize("sex", ["male", "female"])
 def test_strength_factors_have_mean_1_the_group_spread_and_the_person_s_correlation(
     many: list, sex: str

@@ -41,7 +41,7 @@ def worker_cases(
     problem: Problem, text: str, workers: Sequence[Worker], solver: str | None, files: bool
 ) -> tuple[list[Case], list[str]]:
     """One batch case per worker: the problem (``text``, the file's content) with the
-    worker's sex, stature and mass and each group's strength times the worker's factor;
+    worker's sex, stature, mass and age and each group's strength times the worker's factor;
     also the groups not varied (a strength curve the file sets). A problem without a
     built-in body model is refused."""
     body = problem.spec.body
@@ -55,6 +55,7 @@ def worker_cases(
             "body.sex": worker.sex,
             "body.stature_m": round(worker.stature_m, 4),
             "body.mass_kg": round(worker.mass_kg, 2),
+            "body.age_years": round(worker.age_years, 2),
         }
         for half in problem.body.half_joints:
             factor = worker.strength[data_name(half.name)]
