@@ -255,14 +255,22 @@ FORCE_OPTION = click.option(
 )
 
 
-BATCH_OPTIONS = [
-    click.option(
+#: This machine's cores: the processes a population runs on unless ``--jobs`` says otherwise.
+CORES = os.cpu_count() or 1
+
+
+def _jobs_option(every_core: bool) -> Any:
+    return click.option(
         "--jobs",
         type=click.IntRange(min=1),
-        default=1,
-        show_default=True,
-        help="Cases run in parallel on this machine.",
-    ),
+        default=CORES if every_core else 1,
+        show_default=not every_core,
+        help="Cases run in parallel on this machine"
+        + (f" [default: every core, {CORES} here]." if every_core else "."),
+    )
+
+
+BATCH_OPTIONS = [
     click.option(
         "--scheduler",
         metavar="ADDRESS",
@@ -281,7 +289,12 @@ BATCH_OPTIONS = [
 ]
 
 
-def batch_options(command: Any) -> Any:
-    for option in reversed(BATCH_OPTIONS):
+def batch_options(command: Any = None, *, every_core: bool = False) -> Any:
+    """``--jobs`` (one process by default; ``every_core``: one per core), ``--scheduler``,
+    ``--resume``, ``--force`` and ``--quiet``; a decorator, or with ``every_core`` a
+    decorator factory."""
+    if command is None:
+        return lambda decorated: batch_options(decorated, every_core=every_core)
+    for option in reversed([_jobs_option(every_core), *BATCH_OPTIONS]):
         command = option(command)
     return command

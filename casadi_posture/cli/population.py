@@ -59,7 +59,7 @@ SEXES = {"male": ("male",), "female": ("female",), "both": ("male", "female")}
 )
 @SOLVER_OPTION
 @SET_OPTION
-@batch_options
+@batch_options(every_core=True)
 def population(
     problem: str,
     n: int,
@@ -88,7 +88,7 @@ def population(
 
     \b
     Example:
-      casadi-posture population problems/standing_wall_horizontal.toml --n 50 --jobs 2
+      casadi-posture population problems/standing_wall_horizontal.toml --n 50
       casadi-posture population problems/standing_wall_horizontal.toml --n 20 \\
           --set schedule.t_on_s=60 --set schedule.t_off_s=30
     """
