@@ -288,3 +288,38 @@ def test_an_internal_error_is_one_line_unless_asked_for(
     ]
     monkeypatch.setenv("CASADI_POSTURE_DEBUG", "1")
     assert isinstance(run("describe", PROBLEMS / "holding_m45.toml").exception, RuntimeError)
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_a_population_on_every_core_and_says_its_answer_is_partial(
+    tmp_path: Path,
+) -> None:
+    """A population runs on every core by default. Ctrl-C once a worker has finished: exit
+    130, the finished workers kept, population.json marked interrupted with the count it
+    holds, no process left; --resume runs the rest and the answer is whole."""
+    out = tmp_path / "pop"
+    problem = PROBLEMS / "standing_wall_horizontal.toml"
+    command = _command("population", problem, "--n", "4", "--out", out, "--quiet")
+    process = _start(command)
+    cases = out / "cases"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (cases.is_dir() and any(cases.iterdir())):
+        time.sleep(0.05)
+    code, took, stderr = _ctrl_c(process)
+    assert code == 130 and took < STOP_WITHIN_S, (code, took, stderr)
+    assert "Traceback" not in stderr and "--resume" in stderr
+    deadline = time.monotonic() + STOP_WITHIN_S
+    while _live_in_group(process.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not _live_in_group(process.pid)
+    kept = [p for p in cases.iterdir() if not p.name.startswith(".")]
+    partial = json.loads((out / "population.json").read_text())
+    assert partial["interrupted"] is True
+    assert partial["workers_total"] == 8
+    assert partial["workers_finished"] == len(kept) < 8
+    resumed = subprocess.run(
+        [*command, "--resume"], capture_output=True, text=True, check=False, timeout=300
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    whole = json.loads((out / "population.json").read_text())
+    assert whole["interrupted"] is False and whole["workers_finished"] == 8

@@ -236,7 +236,12 @@ def run_population(
     batch = run_batch(
         cases, out, jobs=jobs, scheduler=scheduler, resume=resume, quiet=quiet, describe=described
     )
-    summary = {**described, **population_summary(batch, workers, fixed)}
+    finished = {
+        "workers_finished": len(batch.rows),
+        "workers_total": batch.total,
+        "interrupted": batch.interrupted,  # the shares are those of the finished workers
+    }
+    summary = {**described, **finished, **population_summary(batch, workers, fixed)}
     (out / "population.json").write_text(dumps(summary) + "\n")
     title = f"{problem.path.stem}: {n} workers per sex, seed {seed}"
     figures: tuple[Path, ...] = ()
