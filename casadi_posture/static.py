@@ -122,9 +122,14 @@ def limiting(groups: Sequence[GroupLoad]) -> GroupLoad | None:
 
 def limiting_key(endurance: float, load_pct_mvc: float) -> tuple[float, float]:
     """The order of groups by which limits first: the shorter endurance, then the higher
-    load, each to 9 significant digits, so that the two sides of a symmetric task, equal but
-    for round-off, tie and the first in body order (the right) is named."""
-    return float(f"{endurance:.9g}"), -float(f"{load_pct_mvc:.9g}")
+    load, each ``tied``."""
+    return tied(endurance), -tied(load_pct_mvc)
+
+
+def tied(value: float) -> float:
+    """``value`` to 9 significant digits: the two sides of a symmetric task, equal but for
+    round-off, tie, and the first in body order (the right) is named."""
+    return float(f"{value:.9g}")
 
 
 def law(problem: Problem) -> str:

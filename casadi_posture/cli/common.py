@@ -6,6 +6,7 @@ import math
 import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import click
@@ -247,6 +248,16 @@ def no_report_option(page: str):
     """The ``--no-report`` flag of a command whose report.html shows ``page``."""
     return click.option(
         "--no-report", "no_report", is_flag=True, help=f"Do not write report.html ({page})."
+    )
+
+
+def out_option(default: str) -> Any:
+    """``--out DIR``, the output folder; ``default`` says where it goes without it."""
+    return click.option(
+        "--out",
+        type=click.Path(file_okay=False, path_type=Path),
+        default=None,
+        help=f"Output folder [default: {default}].",
     )
 
 

@@ -16,6 +16,7 @@ from casadi_posture.cli.common import (
     command_line,
     main,
     no_report_option,
+    out_option,
     problem_from,
 )
 from casadi_posture.cli.runs import report_recording, write_run
@@ -75,12 +76,7 @@ from casadi_posture.static import law
     default=None,
     help="Play the recording as a work cycle until this many s.",
 )
-@click.option(
-    "--out",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: out/evaluate/<problem>-<motion>].",
-)
+@out_option("out/evaluate/<problem>-<motion>")
 @click.option(
     "--compare-prediction",
     "compare",

@@ -13,6 +13,7 @@ from casadi_posture.cli.common import (
     SOLVER_OPTION,
     batch_options,
     main,
+    out_option,
     parse_sets,
 )
 from casadi_posture.output.report import table
@@ -39,12 +40,7 @@ SEXES = {"male": ("male",), "female": ("female",), "both": ("male", "female")}
     help="Correlation of one worker's strengths in two muscle groups, 0 to 1 [default: "
     "0.3, docs/population.md].",
 )
-@click.option(
-    "--out",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: out/population/<problem>].",
-)
+@out_option("out/population/<problem>")
 @click.option(
     "--files",
     is_flag=True,

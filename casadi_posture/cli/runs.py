@@ -23,6 +23,7 @@ from casadi_posture.cli.common import (
     echo_free_dofs,
     main,
     no_report_option,
+    out_option,
     parse_sets,
     problem_from,
     shown_groups,
@@ -57,12 +58,7 @@ from casadi_posture.static import law
     help="Minimum acceptable active-torque decrease ratio R_min (0-1).",
 )
 @click.option("--duration", type=float, default=None, help="Simulated time in s.")
-@click.option(
-    "--out",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: out/simulate/<problem>-<strategy>-<solver>].",
-)
+@out_option("out/simulate/<problem>-<strategy>-<solver>")
 @click.option(
     "--animate",
     type=click.Choice(list(WRITERS)),
@@ -146,12 +142,7 @@ def simulate(
 
 @main.command()
 @click.argument("manifest", type=click.Path(dir_okay=False, exists=False))
-@click.option(
-    "--out",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: the manifest's folder + '-rerun'].",
-)
+@out_option("the manifest's folder + '-rerun'")
 @FORCE_OPTION
 def rerun(manifest: str, out: Path | None, force: bool) -> None:
     """Repeat the simulation (or the evaluation of a recording) a manifest.json records (the
@@ -557,12 +548,7 @@ def _finish(report: Any) -> None:
     "fatigue.strategy=active,passive, body.sex=male,female, solver=...; "
     "'KEY1,KEY2=V1,...' ties keys to one value (both halves of a load).",
 )
-@click.option(
-    "--out",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: out/whatif/<problem>].",
-)
+@out_option("out/whatif/<problem>")
 @click.option(
     "--static", is_flag=True, help="Answer from torques at the start posture only (no time loop)."
 )

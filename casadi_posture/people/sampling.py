@@ -87,10 +87,10 @@ def draw_workers(
     sex: the men drawn are the same with or without the women). Per worker: stature and
     ln mass bivariate normal (``anthropometry``), age the survey's at the quantile of a
     third normal score correlated with them as the survey's (a Gaussian copula: ``age_at``);
-    per group of ``groups`` (named without
-    side) a strength factor exp(σ z − σ²/2), mean 1, CV the group's population spread
-    (``strength_spread``), with z = √ρ·z_person + √(1−ρ)·z_group: any two groups of one
-    person correlated ``correlation`` (default ``group_correlation``)."""
+    per group of ``groups`` (named without side) a strength factor exp(σ z − σ²/2), mean 1,
+    CV the group's population spread (``strength_spread``), with z = √ρ·z_person +
+    √(1−ρ)·z_group: any two groups of one person correlated ``correlation`` (default
+    ``group_correlation``)."""
     if not 1 <= n <= MAX_WORKERS:
         raise ValueError(f"n: 1 to {MAX_WORKERS} workers per sex, got {n}")
     rho = group_correlation() if correlation is None else correlation

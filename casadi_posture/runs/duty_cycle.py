@@ -45,6 +45,7 @@ from casadi_posture.output.results import (
 from casadi_posture.output.schedule_plots import plot_duty_vs_rest, plot_runs
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.simulation import SimulationResult, simulate, whole_steps
+from casadi_posture.static import tied
 
 #: Default bisection tolerance on t_on [s] (at least one time step).
 DEFAULT_TOLERANCE_S = 5.0
@@ -350,8 +351,7 @@ def _effort(result: SimulationResult) -> Effort | None:
     if not held:
         return None
     loads = result.timeline.load[held[0]]
-    # to 9 digits: of the two sides of a symmetric task, equal but for round-off, the first
-    group = int(np.argmax([float(f"{load:.9g}") for load in loads]))
+    group = int(np.argmax([tied(load) for load in loads]))
     half = result.problem.body.half_joints[group]
     return Effort(half.name, half.region, float(loads[group]))
 
