@@ -250,6 +250,8 @@ def test_a_population_run_reports_the_share_still_holding_from_its_workers_rows(
         (["--n", "1500"], "--n = 1500: expected at most 2000 workers in all"),
         (["--correlation", "2"], "--correlation = 2.0: expected 0 to 1"),
         (["--sex", "other"], "Invalid value for '--sex'"),
+        (["--set", "body.age_years=50"], "body.age_years = 50: expected not set"),
+        (["--set", "body.stature_m=1.9"], "body.stature_m = 1.9: expected not set"),
     ],
 )
 def test_bad_population_input_is_one_line_with_exit_2(tmp_path, extra, expected) -> None:

@@ -18,6 +18,8 @@ from casadi_posture.people.statistics import wilson
 from casadi_posture.problem import Problem
 from casadi_posture.runs.batch import BatchReport, Case
 
+#: The body's keys every worker has its own of: an override of one would be lost.
+DRAWN_KEYS = frozenset({"body.sex", "body.stature_m", "body.mass_kg", "body.age_years"})
 #: How long [min] the summary asks who still holds the task.
 HORIZONS_MIN = (1, 2, 5, 10, 20)
 #: The strength keys a problem file may set on a group, and whether a factor scales them.
@@ -213,6 +215,9 @@ def run_population(
         expected = "at least one task for the workers to hold"
         raise ProblemError(problem.path, "tasks", MISSING, expected)
     check_size(n, sexes, max_cases, problem.path)
+    for key in DRAWN_KEYS & problem.overrides.keys():
+        expected = "not set: each worker's own is drawn (--sex chooses the sexes)"
+        raise ProblemError(problem.path, key, problem.overrides[key], expected)
     try:
         workers = draw(problem, n, sexes, seed, correlation=correlation)
     except ValueError as error:
