@@ -490,6 +490,7 @@ class NullspaceSolver:
             [ca.vertcat(*h.residuals, *jacobians)],
         )
         self._q, self._p = np.zeros(n), np.array(h.targets, dtype=float)
+        self._fresh = False  # whether the buffer holds the evaluation at self._q
         self._out = np.zeros(function.nnz_out(0))
         self._buffer, evaluate = function.buffer()  # kept: the buffer must outlive its use
         self._buffer.set_arg(0, memoryview(self._q))
@@ -526,11 +527,20 @@ class NullspaceSolver:
         index = self.hierarchy.body.index
         return np.array([index[d] for t in tasks for d in t.dofs], dtype=int)
 
+    def _targets(self) -> None:
+        """Put the hierarchy's targets in the buffer (nothing evaluated with them yet)."""
+        self._p[:] = self.hierarchy.targets
+        self._fresh = False
+
     def _point(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Evaluate at ``q`` [rad]: (0, ‖e_1‖, …, ‖e_L‖), and Δx = -e stacked, each task's
-        part scaled down to its step limit (the Jacobians are left in the buffer)."""
-        self._q[:] = q
-        self._evaluate()
+        part scaled down to its step limit (the Jacobians are left in the buffer). The buffer
+        is reused when it holds ``q`` already: a converged solve's checks and its residuals
+        are at the posture its last iteration evaluated."""
+        if not (self._fresh and np.array_equal(q, self._q)):
+            self._q[:] = q
+            self._evaluate()
+            self._fresh = True
         e = self._errors
         square = e * e
         tasks = np.sqrt(np.bincount(self._task_of_row, square, self._step_limits.size))
@@ -723,7 +733,7 @@ class NullspaceSolver:
     def iteration(self, q: np.ndarray, inequality: Inequality | None = None) -> np.ndarray:
         """The posture [rad] one iteration takes ``q`` to, with nothing held before it (the
         original clamping loop; no acceleration)."""
-        self._p[:] = self.hierarchy.targets
+        self._targets()
         return self._iterate(np.asarray(q, dtype=float), inequality, _NOTHING).q
 
     def solve(
@@ -735,10 +745,10 @@ class NullspaceSolver:
     ) -> IKResult:
         """Iterate from ``q0`` [rad] until the largest joint step is below the tolerance."""
         start = time.perf_counter()
-        h, body = self.hierarchy, self.hierarchy.body
+        body = self.hierarchy.body
         if inequality is not None:
             inequality = Inequality(np.asarray(inequality.a, dtype=float), float(inequality.b))
-        self._p[:] = h.targets
+        self._targets()
         limit = max_iterations or self.options.max_iterations
         q = np.clip(np.asarray(q0, dtype=float), body.lower, body.upper)
         self._floor = list(self._base_floor) if self.options.curvature > 0 else None
