@@ -52,7 +52,7 @@ class WholeBodyAdjustment:
             raise ValueError("the whole-body adjustment needs a comfort level that counts effort")
         self.kept = keep_levels if 0 < keep_levels < hierarchy.depth else hierarchy.depth - 1
         tasks = [t for level in hierarchy.levels[: self.kept] for t in level] + [comfort]
-        self.kept_hierarchy = TaskHierarchy(body, tasks)
+        self.kept_hierarchy = TaskHierarchy(body, tasks, hierarchy.shape)
         self._bind(hierarchy, self.kept_hierarchy)
         self.k = k
         signs = np.array([h.sign for h in body.half_joints], dtype=float)
@@ -79,11 +79,20 @@ class WholeBodyAdjustment:
             for h in (hierarchy, kept)
         ]
 
-    def rebind(self, hierarchy: TaskHierarchy, *, k: float) -> WholeBodyAdjustment:
+    def rebind(
+        self, hierarchy: TaskHierarchy, *, k: float, torque_model: TorqueModel | None = None
+    ) -> WholeBodyAdjustment:
         """This adjustment, its compiled functions shared, on ``hierarchy`` (a copy of the
-        one it was built on) with a copy of its kept levels and the weight ``k``."""
+        one it was built on, or its ``rebound`` for another person) with a copy of its kept
+        levels and the weight ``k``; for another person, their ``torque_model`` (the
+        ``rebound`` of the one it was built on)."""
         other = copy.copy(self)
-        other._bind(hierarchy, self.kept_hierarchy.copy())
+        kept = self.kept_hierarchy.copy()
+        if torque_model is not None:
+            tasks = [t for level in hierarchy.levels for t in level]
+            kept = self.kept_hierarchy.rebound(tasks, hierarchy.shape_values())
+            other._packed = torque_model.default_loads
+        other._bind(hierarchy, kept)
         other.k = k
         return other
 

@@ -10,6 +10,7 @@ negative one; its load is ``T_N = 100·|τa|/st`` [%MVC].
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from functools import lru_cache
@@ -51,6 +52,10 @@ class TorqueModel:
     ``function(q, loads) -> (tau_ext, tau_pas, tau_act, strength, dtau_ext)`` with ``loads``
     the vector of ``casadi_posture.loads.pack``, so load masses and forces
     can change without rebuilding anything.
+
+    On a body whose numbers are the symbols of a ``Shape`` (``shape``: the symbols and their
+    values for one person) the symbols follow the loads in ``p`` and their values follow
+    them in ``default_loads``; ``rebound`` gives another person's model.
     """
 
     def __init__(
@@ -59,14 +64,17 @@ class TorqueModel:
         loads: Sequence[Load],
         passive: Mapping[str, PassiveTorque],
         strength: Mapping[str, Strength],
+        shape: tuple[ca.SX, np.ndarray] | None = None,
     ) -> None:
         self.body = body
         self.loads = tuple(loads)
         q = body.q
-        p = ca.SX.sym("loads", LOAD_PARAMETERS * len(self.loads))
+        own = ca.SX.sym("loads", LOAD_PARAMETERS * len(self.loads))
+        symbols, numbers = shape if shape is not None else (ca.SX(0, 1), np.zeros(0))
         self.tau_ext, self.tau_pas, self.tau_act, self.strength = torque_expressions(
-            body, self.loads, p, passive, strength
+            body, self.loads, own, passive, strength
         )
+        p = ca.vertcat(own, symbols)
         self.p = p
         self.function = ca.Function(
             "torques",
@@ -75,7 +83,8 @@ class TorqueModel:
             ["q", "loads"],
             ["tau_ext", "tau_pas", "tau_act", "strength", "dtau_ext"],
         )
-        self.default_loads = pack(self.loads)
+        self.default_loads = np.concatenate([pack(self.loads), numbers])
+        self._own = own.numel()
         dense = [ca.densify(v) for v in self.function(q, p)]
         self._last: tuple[tuple[bytes, bytes], Torques] | None = None
         self._compiled = Compiled(
@@ -87,12 +96,24 @@ class TorqueModel:
         last answer is kept: a hold whose posture and loads do not change (most steps of a
         simulation nothing tires in) gets a copy of it. (One model per thread: it evaluates
         in buffers of its own.)"""
-        p = self.default_loads if loads is None else loads
+        p = self.default_loads
+        if loads is not None:
+            p = np.concatenate([loads, p[self._own :]]) if p.size > self._own else loads
         key = (np.asarray(q, dtype=float).tobytes(), np.asarray(p, dtype=float).tobytes())
         if self._last is None or self._last[0] != key:
             self._last = (key, self._evaluate(q, p))
         kept = self._last[1]
         return Torques(*(np.array(getattr(kept, f.name)) for f in fields(Torques)))
+
+    def rebound(self, shape: np.ndarray) -> TorqueModel:
+        """This compiled model for another person: the values of its shape's symbols (one
+        model per thread: the copies share buffers)."""
+        other = copy.copy(self)
+        other.default_loads = np.concatenate([self.default_loads[: self._own], shape])
+        if other.default_loads.size != self.default_loads.size:
+            raise ValueError(f"{shape.size} shape values for {self.default_loads.size - self._own}")
+        other._last = None
+        return other
 
     def _evaluate(self, q: Sequence[float], p: np.ndarray) -> Torques:
         """The compiled call behind ``evaluate``."""

@@ -36,9 +36,19 @@ class TaskHierarchy:
     stacked); ``residuals[k]`` and ``jacobians[k]`` are their SX expressions in
     ``body.q`` and the target vector ``p``; ``function(q, p)`` returns
     ``e_1, …, e_L, J_1, …, J_L`` in one call.
+
+    On a body whose numbers are the symbols of a ``Shape`` (``shape``, with their values for
+    the person the tasks are built for) those symbols follow the tasks' parameters in ``p``
+    and their values follow the targets: ``rebound`` gives the hierarchy of another person
+    without building anything.
     """
 
-    def __init__(self, body: BodyModel, tasks: Sequence[Task]) -> None:
+    def __init__(
+        self,
+        body: BodyModel,
+        tasks: Sequence[Task],
+        shape: tuple[ca.SX, np.ndarray] | None = None,
+    ) -> None:
         if not tasks:
             raise ProblemError(None, "tasks", [], "at least one task to solve")
         self.body = body
@@ -46,8 +56,11 @@ class TaskHierarchy:
         self.priorities = priorities
         self.levels = [[t for t in tasks if t.priority == p] for p in priorities]
         values = [t.targets() for level in self.levels for t in level]
-        self.targets = np.concatenate(values) if values else np.zeros(0)
-        self.p = ca.SX.sym("targets", self.targets.size)
+        own = np.concatenate(values) if values else np.zeros(0)
+        symbols, numbers = shape if shape is not None else (ca.SX(0, 1), np.zeros(0))
+        self.targets = np.concatenate([own, numbers])
+        self.shape = shape
+        self.p = ca.vertcat(ca.SX.sym("targets", own.size), symbols)
         self.residuals: list[ca.SX] = []
         self.blocks: list[list[tuple[Task, slice]]] = []
         self._offsets: dict[str, int] = {}
@@ -82,6 +95,28 @@ class TaskHierarchy:
         other = copy.copy(self)
         other.targets = self.targets.copy()
         return other
+
+    def rebound(self, tasks: Sequence[Task], shape: np.ndarray) -> TaskHierarchy:
+        """This compiled hierarchy for another person: ``tasks`` of the same names and sizes
+        as its own (they replace its own, their targets taken) and the values of its shape's
+        symbols."""
+        other = copy.copy(self)
+        own = {t.name: t for t in tasks}
+        other.levels = [[own[t.name] for t in level] for level in self.levels]
+        other.blocks = [[(own[t.name], rows) for t, rows in level] for level in self.blocks]
+        values = [t.targets() for level in other.levels for t in level]
+        other.targets = np.concatenate([*values, shape])
+        if other.targets.size != self.targets.size:
+            raise ValueError(f"{other.targets.size} target values for {self.targets.size}")
+        return other
+
+    def shape_values(self) -> np.ndarray:
+        """The values of the shape's symbols in ``targets`` (none without a shape)."""
+        return (
+            self.targets[self.targets.size - self.shape[1].size :]
+            if self.shape
+            else self.targets[:0]
+        )
 
     def offset(self, task: Task) -> int:
         """Where ``task``'s parameters start in ``targets``."""

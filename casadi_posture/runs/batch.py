@@ -87,7 +87,8 @@ class Case:
     carries the file's content to workers that have no copy of it (None: read the file
     where the case runs); ``report`` writes a simulated case's report.html; without
     ``files`` a case keeps only its summary row (no timeline, no figure: a population's
-    workers)."""
+    workers); ``shared_shape`` builds its solvers on the body's shape, for the next case of
+    another person of the same structure (``simulate``; a population's workers)."""
 
     name: str
     problem: str
@@ -97,6 +98,7 @@ class Case:
     text: str | None = None
     report: bool = True
     files: bool = True
+    shared_shape: bool = False
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the case's result (and the tool's version)."""
@@ -192,7 +194,7 @@ def run_case(case: Case) -> Outcome:
             return Outcome(case.name, row, {})
         files: dict[str, bytes] = {}
         if case.simulate:
-            outcomes, files = _simulate(problem, case.solver, case.report, case.files)
+            outcomes, files = _simulate(problem, case)
         else:
             outcomes = static_row(solve(problem, case.solver))
         flags = outcomes.pop("flags")
@@ -215,9 +217,7 @@ def one_line(text: str) -> str:
     return line if len(line) <= REASON_CHARACTERS else line[: REASON_CHARACTERS - 3] + "..."
 
 
-def _simulate(
-    problem: Problem, solver: str | None, report: bool, files: bool = True
-) -> tuple[dict[str, Any], dict[str, bytes]]:
+def _simulate(problem: Problem, case: Case) -> tuple[dict[str, Any], dict[str, bytes]]:
     """A simulated case's row and files (with ``report``, its report.html too: an extra,
     left out if it cannot be written; without ``files``, none)."""
     from casadi_posture.output.html_report import write_report
@@ -226,14 +226,14 @@ def _simulate(
     from casadi_posture.output.rows import simulation_row
     from casadi_posture.simulation import simulate
 
-    result = simulate(problem, solver)
+    result = simulate(problem, case.solver, shared_shape=case.shared_shape)
     if result.stop == "interrupted":
         raise KeyboardInterrupt
-    if not files:
+    if not case.files:
         return simulation_row(result), {}
     with tempfile.TemporaryDirectory() as folder:
         written = write_results(result, Path(folder)) + plot_simulation(result, Path(folder))
-        if report:
+        if case.report:
             try:
                 page = write_report(result, Path(folder) / "report.html")
             except Exception:  # the page is an extra: never lose a case over it

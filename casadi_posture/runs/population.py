@@ -77,6 +77,7 @@ def worker_cases(
                 text=text,
                 report=files,
                 files=files,
+                shared_shape=True,
             )
         )
     return cases, sorted(set(fixed))

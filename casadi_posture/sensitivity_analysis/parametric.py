@@ -30,10 +30,10 @@ import numpy as np
 
 from casadi_posture.biomech.low_back import has_lumbar_joint, low_back_expressions, moment_arms
 from casadi_posture.biomech.passive import ExponentialPassive, PassiveTorque, ReshapedPassive
+from casadi_posture.biomech.shape import numbers, rebuilt
 from casadi_posture.biomech.strength import ConstantStrength, ScaledCurveStrength, Strength
 from casadi_posture.biomech.torques import comfort_strengths, torque_expressions
 from casadi_posture.body.loads import LOAD_PARAMETERS, pack
-from casadi_posture.body.tree import BodyModel
 from casadi_posture.data.parameters import Parameter
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import (
@@ -107,12 +107,12 @@ class ParametricProblem:
         self._symbols: list[ca.SX] = []
         self._records: dict[str, ca.SX] = {}
         slopes = self._body_slopes() if symbolic and problem.spec.body.tree is None else {}
-        numbers = [ca.SX(v) for v in _geometry(problem)]
+        numbers = [ca.SX(v) for v in _numbers(problem)]
         for (key, value, unit), slope in slopes.items():
             x = self._input(key, value, unit, "body")
             numbers = [n + s * (x - value) if s else n for n, s in zip(numbers, slope, strict=True)]
         groups = len(problem.body.half_joints)
-        self.body = _rebuild(problem.body, numbers[:-groups]) if slopes else problem.body
+        self.body = rebuilt(problem.body, numbers[:-groups]) if slopes else problem.body
         self.q = self.body.q
         strengths = self._strengths(numbers[-groups:])
         passive = {d.name: self._passive(d.name) for d in self.body.dofs}
@@ -167,7 +167,7 @@ class ParametricProblem:
         """The slope of every geometry number and strength in each body input the builder
         is linear in, keyed by (key, value, unit)."""
         problem = self.problem
-        base = _geometry(problem)
+        base = _numbers(problem)
         out = {}
         for key, unit in BODY_INPUTS:
             value = getattr(problem.spec.body, key.split(".")[1])
@@ -175,7 +175,7 @@ class ParametricProblem:
                 continue
             step = BODY_STEP * value
             plus, minus = (
-                _geometry(problem_from_data(problem.data, problem.path, {key: value + s}))
+                _numbers(problem_from_data(problem.data, problem.path, {key: value + s}))
                 for s in (step, -step)
             )
             curvature = np.abs(plus + minus - 2 * base)
@@ -411,39 +411,6 @@ def _ratio(problem: Problem, k: int) -> float | None:
     return None if group is None else group.strength_ratio
 
 
-def _geometry(problem: Problem) -> np.ndarray:
-    """The body's numbers in a fixed order: DOF origins, segment masses and centres of mass,
-    landmarks, sole points [m, kg], then every constant strength or shipped curve's scale
-    [N·m] (0 for a file's curve)."""
-    body = problem.body
-    numbers: list[float] = []
-    for dof in body.dofs:
-        numbers += dof.origin
-    for segment in body.segments:
-        numbers += [segment.mass, *segment.com]
-    for landmark in body.landmarks.values():
-        numbers += landmark.position
-    for foot in body.feet:
-        numbers += [c for point in foot.outline for c in point]
-    for half in body.half_joints:
-        model = problem.strength[half.name]
-        scalable = isinstance(model, ConstantStrength | ScaledCurveStrength)
-        numbers.append(model.value if scalable else 0.0)
-    return np.asarray(numbers, dtype=float)
-
-
-def _rebuild(body: BodyModel, values: list[ca.SX]) -> BodyModel:
-    """``body`` with its numbers (the order of ``_geometry``) replaced by ``values``."""
-    it = iter(values)
-
-    def take(n: int) -> tuple[ca.SX, ...]:
-        return tuple(next(it) for _ in range(n))
-
-    dofs = [replace(d, origin=take(3)) for d in body.dofs]
-    segments = []
-    for s in body.segments:
-        mass, com = take(1)[0], take(3)
-        segments.append(replace(s, mass=mass, com=com))
-    landmarks = [replace(lm, position=take(3)) for lm in body.landmarks.values()]
-    feet = [replace(f, outline=tuple(take(3) for _ in f.outline)) for f in body.feet]
-    return BodyModel(body.name, dofs, segments, landmarks, gravity=body.gravity, feet=feet)
+def _numbers(problem: Problem) -> np.ndarray:
+    """The body's numbers (``shape.numbers``) with the problem's strengths."""
+    return numbers(problem.body, problem.strength)
