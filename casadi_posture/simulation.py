@@ -252,11 +252,7 @@ class _Solvers:
 
 
 def simulate(
-    problem: Problem,
-    solver: str | None = None,
-    *,
-    stop_at_threshold: bool = False,
-    shared_shape: bool = False,
+    problem: Problem, solver: str | None = None, *, stop_at_threshold: bool = False
 ) -> SimulationResult:
     """Simulate the problem's hold for ``simulation.duration_s`` with ``solver`` (default:
     the file's), following its work–rest ``[schedule]`` if it has one.
@@ -271,25 +267,22 @@ def simulate(
     reaches ``fatigue.fatigue_threshold`` (``stop == "fatigue_threshold"``), the moment the
     fatigue-reducing constraint would engage.
 
-    With ``shared_shape`` the solvers and torque functions are built on the body's shape
-    (its numbers as symbols: ``biomech.shape``) and kept for the next run of any person of
-    the same structure — another stature, mass, age or strength — which binds them to its
-    own numbers instead of building (a population's workers: 0.15 s a worker on the 29-DOF
-    standing body). Each evaluation then costs 15–50 % more, so a single run builds on its
-    numbers.
+    The solvers and torque functions are built on the body's shape (its numbers as symbols:
+    ``biomech.shape``) and kept for the next run in this thread of any person of the same
+    structure — another stature, mass, age or strength — which binds them to its own
+    numbers instead of building (a population's workers: 0.15 s a worker on the 29-DOF
+    standing body).
     """
     if not problem.tasks:
         raise ProblemError(problem.path, "tasks", [], "at least one task to hold")
     with interrupt.deferred():
-        return _run(problem, solver, stop_at_threshold, shared_shape)
+        return _run(problem, solver, stop_at_threshold)
 
 
-def _run(
-    problem: Problem, solver: str | None, stop_at_threshold: bool, shared_shape: bool
-) -> SimulationResult:
+def _run(problem: Problem, solver: str | None, stop_at_threshold: bool) -> SimulationResult:
     """Set the run up, step it until it ends, and gather its result."""
     started = time.perf_counter()
-    run = _setup(problem, solver, shared_shape)
+    run = _setup(problem, solver)
     state = _State(run.fatigue.initial_state(), problem.posture.copy())
     for step in range(problem.spec.simulation.steps):
         now = step * run.dt
@@ -467,40 +460,34 @@ PERSON_KEYS = frozenset({"stature_m", "mass_kg", "age_years", "hip_height_m", "s
 STRENGTH_VALUE_KEYS = frozenset({"strength_Nm", "strength_scale", "strength_ratio"})
 
 
-def _built(problem: Problem, keep_levels: int | None, shared_shape: bool = False) -> _Built:
+def _built(problem: Problem, keep_levels: int | None) -> _Built:
     """The problem's hierarchy, torque model and (``keep_levels`` given) whole-body
-    adjustment, built once in this thread per structure and body (``shared_shape``: per
-    structure, on its ``Shape``) and bound to this body's numbers."""
+    adjustment, built once per structure in this thread on its ``Shape`` and bound to this
+    body's numbers."""
     values, tasks = numbers(problem.body, problem.strength), problem.task_objects()
-    person = np.flatnonzero(values).tobytes() if shared_shape else values.tobytes()
-    key = (_structure(problem, tasks), person, keep_levels, shared_shape)
+    key = (_structure(problem, tasks), np.flatnonzero(values).tobytes(), keep_levels)
     if not hasattr(_builds, "kept"):
         _builds.kept = OrderedDict()
     kept: OrderedDict = _builds.kept
     if key in kept:
         kept.move_to_end(key)
     else:
-        shape = Shape.of(problem.body, problem.strength) if shared_shape else None
-        kept[key] = _build(problem, tasks, keep_levels, shape)
+        kept[key] = _build(problem, tasks, keep_levels)
         while len(kept) > KEPT_BUILDS:
             kept.popitem(last=False)
     template: _Built = kept[key]
-    own = values[values != 0.0] if shared_shape else np.zeros(0)
+    own = values[values != 0.0]
     hierarchy = template.hierarchy.rebound(tasks, own)
     return _Built(hierarchy, template.torque_model.rebound(own), template.whole_body)
 
 
-def _build(
-    problem: Problem, tasks: list[Task], keep_levels: int | None, shape: Shape | None
-) -> _Built:
+def _build(problem: Problem, tasks: list[Task], keep_levels: int | None) -> _Built:
     """The hierarchy of ``tasks``, the torque model and the whole-body adjustment on the
-    problem's body, or on ``shape`` (its numbers symbols)."""
-    if shape is None:
-        hierarchy, torque_model = TaskHierarchy(problem.body, tasks), problem.torque_model()
-    else:
-        pair = (shape.symbols, shape.values(problem.body, problem.strength))
-        hierarchy = TaskHierarchy(shape.body, _shaped(tasks, shape), pair)
-        torque_model = TorqueModel(shape.body, problem.loads, problem.passive, shape.strength, pair)
+    problem's ``Shape`` (its body's numbers symbols)."""
+    shape = Shape.of(problem.body, problem.strength)
+    pair = (shape.symbols, shape.values(problem.body, problem.strength))
+    hierarchy = TaskHierarchy(shape.body, _shaped(tasks, shape), pair)
+    torque_model = TorqueModel(shape.body, problem.loads, problem.passive, shape.strength, pair)
     whole_body = None
     if keep_levels is not None and _effort_comfort(problem) is not None:
         whole_body = WholeBodyAdjustment(torque_model, hierarchy, k=0.0, keep_levels=keep_levels)
@@ -546,13 +533,13 @@ def _structure(problem: Problem, tasks: list[Task]) -> str:
     )
 
 
-def _setup(problem: Problem, solver: str | None, shared_shape: bool = False) -> _Setup:
+def _setup(problem: Problem, solver: str | None) -> _Setup:
     """Check the adjustment's settings and build, once, every object the steps use."""
     spec, body = problem.spec, problem.body
     name = solver or spec.solver.name
     settings = constraint_settings(problem)
     keep_levels = settings.keep_levels if settings.adjustment == "whole_body" else None
-    built = _built(problem, keep_levels, shared_shape)
+    built = _built(problem, keep_levels)
     hierarchy, torque_model = built.hierarchy.copy(), built.torque_model
     solvers = _Solvers(name, problem, hierarchy)
     fatigue = problem.fatigue

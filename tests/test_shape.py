@@ -98,8 +98,8 @@ def test_a_second_worker_reuses_the_build_and_gets_their_own_answer(solver, atol
     simulation._builds.__dict__.clear()
     expected = simulate(b, solver)
     simulation._builds.__dict__.clear()
-    simulate(a, solver, shared_shape=True)
-    again = simulate(b, solver, shared_shape=True)
+    simulate(a, solver)
+    again = simulate(b, solver)
     assert len(simulation._builds.kept) == 1
     assert any(e.kind == "constraint_on" for e in again.events)
     assert [(e.time_s, e.kind, e.half_joint) for e in again.events] == [
@@ -113,8 +113,8 @@ def test_another_sex_or_strength_model_is_another_structure() -> None:
     """A woman's body (other data) and a strength model of a file's own are built anew."""
     short = {"simulation.duration_s": 5.0}
     simulation._builds.__dict__.clear()
-    simulate(load_problem(WALL, short), "nullspace", shared_shape=True)
-    simulate(load_problem(WALL, {**short, "body.sex": "female"}), "nullspace", shared_shape=True)
+    simulate(load_problem(WALL, short), "nullspace")
+    simulate(load_problem(WALL, {**short, "body.sex": "female"}), "nullspace")
     curve = {
         "body.half_joints.elbow_flexors_r.strength_curve": {
             "dof": "elbow_flexion_r",
@@ -122,19 +122,8 @@ def test_another_sex_or_strength_model_is_another_structure() -> None:
             "strength_Nm": [60.0, 70.0],
         }
     }
-    simulate(load_problem(WALL, {**short, **curve}), "nullspace", shared_shape=True)
+    simulate(load_problem(WALL, {**short, **curve}), "nullspace")
     assert len(simulation._builds.kept) == 3
-
-
-def test_without_a_shared_shape_each_person_is_built_on_their_numbers() -> None:
-    """A single run builds on its numbers (each evaluation is cheaper): another person is
-    another build."""
-    short = {"simulation.duration_s": 5.0}
-    simulation._builds.__dict__.clear()
-    simulate(load_problem(WALL, short), "nullspace")
-    simulate(load_problem(WALL, {**short, **OTHER}), "nullspace")
-    simulate(load_problem(WALL, short), "nullspace")
-    assert len(simulation._builds.kept) == 2
 
 
 def test_a_shape_refuses_a_body_with_its_zeros_elsewhere() -> None:

@@ -4,10 +4,13 @@ are CasADi symbols, so that what is built on it (the task hierarchy, the torque 
 solvers) serves every person of the same structure: scaling to another stature, mass, age
 or strength changes numbers, not structure (docs/population.md).
 
-A number that is zero on the body it is built from (a joint centre on the midline, a
-segment without lateral offset) stays an exact zero: it is zero on every body of the same
-structure, and a symbol there would add instructions to every evaluation. So a shape
-serves the bodies whose zeros lie at the same places (``Shape.fits``).
+Each point is given relative to the centre of the DOF that carries it (each DOF's centre
+relative to its parent's), the offsets forward kinematics multiplies by, and a number that
+is zero on the body a shape is built from (a point straight above its joint, on the
+midline) stays an exact zero: a shape serves the bodies whose zeros lie at the same places
+(``Shape.fits``). So the compiled functions have as many instructions as on the body's
+numbers (32 581 instead of 32 159 for the 29-DOF standing wall hold's levels and Jacobians;
+with world coordinates as symbols, 36 515: 20 % slower evaluations).
 """
 
 from __future__ import annotations
@@ -23,18 +26,22 @@ from casadi_posture.body.tree import BodyModel
 
 
 def numbers(body: BodyModel, strength: Mapping[str, Strength]) -> np.ndarray:
-    """The body's numbers in a fixed order: DOF origins, segment masses and centres of mass,
+    """The body's numbers in a fixed order, each point relative to the centre of the DOF
+    that carries it: DOF origins (from the parent's), segment masses and centres of mass,
     landmarks, sole points [m, kg], then each half-joint's constant strength or shipped
-    curve's value [N·m] (0 for a curve of a file's own, which is not a number of the body)."""
+    curve's value [N·m] (0 for a curve of a file's own, which is not a number of the body).
+    Relative, so that a body rebuilt on symbols (``Shape``) has the offsets its forward
+    kinematics uses as the symbols themselves, not differences computed at every call."""
+    origin = {None: np.zeros(3)} | {d.name: np.asarray(d.origin, dtype=float) for d in body.dofs}
     out: list[float] = []
     for dof in body.dofs:
-        out += dof.origin
+        out += (origin[dof.name] - origin[dof.parent]).tolist()
     for segment in body.segments:
-        out += [segment.mass, *segment.com]
+        out += [segment.mass, *(np.asarray(segment.com) - origin[segment.dof])]
     for landmark in body.landmarks.values():
-        out += landmark.position
+        out += (np.asarray(landmark.position) - origin[landmark.dof]).tolist()
     for foot in body.feet:
-        out += [c for point in foot.outline for c in point]
+        out += [c for point in foot.outline for c in np.asarray(point) - origin[foot.dof]]
     for half in body.half_joints:
         model = strength[half.name]
         out.append(model.value if scalable(model) else 0.0)
@@ -51,17 +58,22 @@ def rebuilt(body: BodyModel, values: Sequence[float | ca.SX]) -> BodyModel:
     """``body`` with its geometry (the order of ``numbers``, strengths left out) replaced by
     ``values``."""
     it = iter(values)
+    origin: dict[str | None, tuple] = {None: (0.0, 0.0, 0.0)}
 
-    def take(n: int) -> tuple[float | ca.SX, ...]:
-        return tuple(next(it) for _ in range(n))
+    def at(dof: str | None) -> tuple:
+        base = origin[dof]
+        return tuple(b + next(it) for b in base)
 
-    dofs = [replace(d, origin=take(3)) for d in body.dofs]
+    dofs = []
+    for d in body.dofs:
+        origin[d.name] = at(d.parent)
+        dofs.append(replace(d, origin=origin[d.name]))
     segments = []
     for s in body.segments:
-        mass, com = take(1)[0], take(3)
-        segments.append(replace(s, mass=mass, com=com))
-    landmarks = [replace(lm, position=take(3)) for lm in body.landmarks.values()]
-    feet = [replace(f, outline=tuple(take(3) for _ in f.outline)) for f in body.feet]
+        mass = next(it)
+        segments.append(replace(s, mass=mass, com=at(s.dof)))
+    landmarks = [replace(lm, position=at(lm.dof)) for lm in body.landmarks.values()]
+    feet = [replace(f, outline=tuple(at(f.dof) for _ in f.outline)) for f in body.feet]
     return BodyModel(body.name, dofs, segments, landmarks, gravity=body.gravity, feet=feet)
 
 

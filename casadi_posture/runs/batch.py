@@ -87,8 +87,7 @@ class Case:
     carries the file's content to workers that have no copy of it (None: read the file
     where the case runs); ``report`` writes a simulated case's report.html; without
     ``files`` a case keeps only its summary row (no timeline, no figure: a population's
-    workers); ``shared_shape`` builds its solvers on the body's shape, for the next case of
-    another person of the same structure (``simulate``; a population's workers)."""
+    workers)."""
 
     name: str
     problem: str
@@ -98,7 +97,6 @@ class Case:
     text: str | None = None
     report: bool = True
     files: bool = True
-    shared_shape: bool = False
 
     def fingerprint(self) -> str:
         """A hash of everything that decides the case's result (and the tool's version)."""
@@ -226,7 +224,7 @@ def _simulate(problem: Problem, case: Case) -> tuple[dict[str, Any], dict[str, b
     from casadi_posture.output.rows import simulation_row
     from casadi_posture.simulation import simulate
 
-    result = simulate(problem, case.solver, shared_shape=case.shared_shape)
+    result = simulate(problem, case.solver)
     if result.stop == "interrupted":
         raise KeyboardInterrupt
     if not case.files:

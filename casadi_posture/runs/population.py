@@ -77,7 +77,6 @@ def worker_cases(
                 text=text,
                 report=files,
                 files=files,
-                shared_shape=True,
             )
         )
     return cases, sorted(set(fixed))
