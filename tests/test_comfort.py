@@ -158,3 +158,29 @@ def test_the_whole_body_adjustment_at_the_wall() -> None:
     k = int(np.flatnonzero(tl.time == on.time_s)[0])
     load = tl.load[:, [h.name for h in problem.body.half_joints].index("shoulder_flexors_r")]
     assert load[after].max() < load[k]  # the tired group carries less from then on
+
+
+def test_the_load_bound_is_the_owner_load_gradient_by_finite_differences() -> None:
+    """The whole-body adjustment's bound aᵀq ≤ aᵀq₀ on the owner's load [%MVC]: ``a`` is the
+    unit gradient of that load, here against central differences of the torque model's."""
+    from casadi_posture import simulation
+
+    problem = cp.load(PROBLEMS / "standing_wall_horizontal.toml")
+    built = simulation._built(problem, 2)
+    names = [h.name for h in problem.body.half_joints]
+    rng = np.random.default_rng(7)
+    for owner in ("elbow_flexors_r", "shoulder_flexors_r", "lumbar_extensors"):
+        k = names.index(owner)
+        q = problem.posture + rng.uniform(-0.05, 0.05, problem.body.n)
+        inequality, load = built.whole_body.bound(q, k)
+        assert load == pytest.approx(built.torque_model.evaluate(q).load_pct_mvc[k], rel=1e-12)
+        h = 1e-6
+        difference = np.array(
+            [
+                built.torque_model.evaluate(q + h * e).load_pct_mvc[k]
+                - built.torque_model.evaluate(q - h * e).load_pct_mvc[k]
+                for e in np.eye(problem.body.n)
+            ]
+        ) / (2 * h)
+        np.testing.assert_allclose(inequality.a, difference / np.linalg.norm(difference), atol=1e-7)
+        assert inequality.b == pytest.approx(float(inequality.a @ q), rel=1e-12)

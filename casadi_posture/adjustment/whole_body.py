@@ -58,15 +58,19 @@ class WholeBodyAdjustment:
         signs = np.array([h.sign for h in body.half_joints], dtype=float)
         active = ca.vertcat(*[torque_model.tau_act[h.dof_index] for h in body.half_joints])
         load = 100.0 * ca.DM(signs) * active / torque_model.strength
+        # the owner's gradient by one reverse sweep of pickᵀ·load (pick: 1 at the owner), not
+        # the whole Jacobian of which it is one row (5 207 instructions instead of 26 472)
+        pick = ca.SX.sym("pick", load.numel())
         self._load = Compiled(
             ca.Function(
                 "half_joint_load",
-                [body.q, torque_model.p],
-                [load, ca.densify(ca.jacobian(load, body.q))],
-                ["q", "loads"],
-                ["load", "load_jacobian"],
+                [body.q, torque_model.p, pick],
+                [load, ca.densify(ca.gradient(ca.dot(pick, load), body.q))],
+                ["q", "loads", "pick"],
+                ["load", "gradient"],
             )
         )
+        self._pick = np.zeros(load.numel())
         self._packed = torque_model.default_loads
 
     def _bind(self, hierarchy: TaskHierarchy, kept: TaskHierarchy) -> None:
@@ -105,10 +109,11 @@ class WholeBodyAdjustment:
     def bound(self, q: np.ndarray, owner: int) -> tuple[Inequality | None, float]:
         """The ``owner`` half-joint's load [%MVC] at ``q`` [rad] and the hard constraint that
         it does not rise, linearised there (None where the load does not depend on q)."""
-        out = self._load(q=q, loads=self._packed)
-        count = out["load"].size
+        self._pick[:] = 0.0
+        self._pick[owner] = 1.0
+        out = self._load(q=q, loads=self._packed, pick=self._pick)
         value = float(out["load"][owner])
-        gradient = out["load_jacobian"].reshape((count, -1), order="F")[owner].copy()
+        gradient = out["gradient"].copy()
         norm = float(np.linalg.norm(gradient))
         if norm <= FLAT_GRADIENT:
             return None, value

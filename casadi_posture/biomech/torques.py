@@ -11,9 +11,9 @@ negative one; its load is ``T_N = 100·|τa|/st`` [%MVC].
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields
-from functools import lru_cache
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property, lru_cache, partial
 
 import casadi as ca
 import numpy as np
@@ -30,7 +30,9 @@ from casadi_posture.compiled import Compiled
 class Torques:
     """Torques at one posture; per DOF arrays [N·m], per half-joint arrays in
     ``BodyModel.half_joints`` order (positive group of each DOF first), and
-    ``external_jacobian[i, j] = ∂τe_i/∂q_j`` [N·m/rad] (paper eq. 12) by AD."""
+    ``external_jacobian[i, j] = ∂τe_i/∂q_j`` [N·m/rad] (paper eq. 12) by AD, computed at
+    its first use by ``jacobian_of`` (only the paper's strategy reads it: its compiled
+    function has nine tenths of the instructions at 29 DOF)."""
 
     q: np.ndarray
     external: np.ndarray
@@ -38,12 +40,21 @@ class Torques:
     active: np.ndarray
     strength: np.ndarray
     half_joint_torque: np.ndarray
-    external_jacobian: np.ndarray
+    jacobian_of: Callable[[], np.ndarray] = field(repr=False, compare=False)
+
+    @cached_property
+    def external_jacobian(self) -> np.ndarray:
+        """∂τe_i/∂q_j [N·m/rad] at ``q`` (paper eq. 12)."""
+        return self.jacobian_of()
 
     @property
     def load_pct_mvc(self) -> np.ndarray:
         """Normalised torque T_N of every half-joint [%MVC] (paper eq. 1, in percent)."""
         return 100.0 * self.half_joint_torque / self.strength
+
+
+#: The array fields of ``Torques``.
+_ARRAYS = ("q", "external", "passive", "active", "strength", "half_joint_torque")
 
 
 class TorqueModel:
@@ -87,8 +98,12 @@ class TorqueModel:
         self._own = own.numel()
         dense = [ca.densify(v) for v in self.function(q, p)]
         self._last: tuple[tuple[bytes, bytes], Torques] | None = None
+        names = self.function.name_out()
         self._compiled = Compiled(
-            ca.Function("torques_dense", [q, p], dense, ["q", "loads"], self.function.name_out())
+            ca.Function("torques_dense", [q, p], dense[:4], ["q", "loads"], names[:4])
+        )
+        self._jacobian = Compiled(
+            ca.Function("external_jacobian", [q, p], dense[4:], ["q", "loads"], names[4:])
         )
 
     def evaluate(self, q: Sequence[float], loads: np.ndarray | None = None) -> Torques:
@@ -103,7 +118,7 @@ class TorqueModel:
         if self._last is None or self._last[0] != key:
             self._last = (key, self._evaluate(q, p))
         kept = self._last[1]
-        return Torques(*(np.array(getattr(kept, f.name)) for f in fields(Torques)))
+        return replace(kept, **{f: np.array(getattr(kept, f)) for f in _ARRAYS})
 
     def rebound(self, shape: np.ndarray) -> TorqueModel:
         """This compiled model for another person: the values of its shape's symbols (one
@@ -125,8 +140,15 @@ class TorqueModel:
         carried = np.empty(2 * n)
         carried[0::2] = np.maximum(tau_a, 0.0)
         carried[1::2] = np.maximum(-tau_a, 0.0)
-        jacobian = out["dtau_ext"].reshape((n, n), order="F").copy()
-        return Torques(np.asarray(q, dtype=float), tau_e, tau_p, tau_a, st, carried, jacobian)
+        at = np.array(q, dtype=float)
+        return Torques(
+            at, tau_e, tau_p, tau_a, st, carried, partial(self._external_jacobian, at, p)
+        )
+
+    def _external_jacobian(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """∂τe/∂q [N·m/rad] at ``q`` [rad] with the parameters ``p``, n×n."""
+        n = self.body.n
+        return self._jacobian(q=q, loads=p)["dtau_ext"].reshape((n, n), order="F").copy()
 
 
 def torque_expressions(
