@@ -481,6 +481,17 @@ def _built(problem: Problem, keep_levels: int | None) -> _Built:
     return _Built(hierarchy, template.torque_model.rebound(own), template.whole_body)
 
 
+def torque_model(problem: Problem) -> TorqueModel:
+    """The torque model a simulation of ``problem`` uses: its build in this thread (the one
+    its last run made or rebound, without building again), bound to its body's numbers; a
+    problem without tasks (a recording's) builds its own."""
+    if not problem.tasks:
+        return problem.torque_model()
+    settings = constraint_settings(problem)
+    keep_levels = settings.keep_levels if settings.adjustment == "whole_body" else None
+    return _built(problem, keep_levels).torque_model
+
+
 def _build(problem: Problem, tasks: list[Task], keep_levels: int | None) -> _Built:
     """The hierarchy of ``tasks``, the torque model and the whole-body adjustment on the
     problem's ``Shape`` (its body's numbers symbols)."""

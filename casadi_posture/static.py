@@ -318,7 +318,7 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     """Torques and loads at ``q`` [rad] (default: the problem's ``posture_deg``)."""
     torques = problem.torque_model().evaluate(problem.posture if q is None else q)
     groups = tuple(group_loads(problem, torques))
-    capable = capability(population_strength(problem, torques.strength), torques.half_joint_torque)
+    capable = capable_shares(problem, torques)
     check = plausibility(problem).check(torques.q, "posture")
     back = low_back(problem, torques.q)
     flags = (
@@ -329,6 +329,11 @@ def at_posture(problem: Problem, q: Sequence[float] | None = None) -> StaticAnsw
     )
     scores = posture_scores(problem, torques.q)
     return StaticAnswer(problem, torques, groups, None, (), flags, capable, check, scores, back)
+
+
+def capable_shares(problem: Problem, torques: Torques) -> Capability:
+    """The share of each sex strong enough for every group's torque at ``torques``."""
+    return capability(population_strength(problem, torques.strength), torques.half_joint_torque)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:

@@ -8,13 +8,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, fields
+from functools import cache
 from typing import Any
 
 from casadi_posture.data import parameters
 
 
+@cache
 def value(name: str) -> Any:
-    """The worksheet record ``name`` of ``data/rula_reba.toml`` (its ``value``)."""
+    """The worksheet record ``name`` of ``data/rula_reba.toml`` (its ``value``; not to be
+    changed in place: every worksheet shares it)."""
     return parameters.load("rula_reba")[f"rula_reba.{name}"].value
 
 
@@ -40,13 +43,19 @@ def clip(score: int, low: int, high: int) -> int:
 
 def check_finite(inputs: object) -> None:
     """Refuse a non-finite or negative-load field of a worksheet's inputs."""
-    for f in fields(inputs):  # type: ignore[arg-type]
-        v = getattr(inputs, f.name)
+    for name in _numbers(type(inputs)):
+        v = getattr(inputs, name)
         if isinstance(v, float | int) and not isinstance(v, bool):
             if not math.isfinite(v):
-                raise ValueError(f"{f.name} = {v}: a finite number is needed")
-            if f.name.endswith("_kg") and v < 0:
-                raise ValueError(f"{f.name} = {v}: a load >= 0 kg is needed")
+                raise ValueError(f"{name} = {v}: a finite number is needed")
+            if name.endswith("_kg") and v < 0:
+                raise ValueError(f"{name} = {v}: a load >= 0 kg is needed")
+
+
+@cache
+def _numbers(kind: type) -> tuple[str, ...]:
+    """The fields of a worksheet's inputs that hold numbers (not flags)."""
+    return tuple(f.name for f in fields(kind) if f.type in ("float", "int", float, int))
 
 
 @dataclass(frozen=True)

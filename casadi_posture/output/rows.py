@@ -14,8 +14,8 @@ from casadi_posture.output.low_back import static_row as back_row
 from casadi_posture.output.results import summary
 from casadi_posture.output.scores import row as score_row
 from casadi_posture.output.scores import worst
-from casadi_posture.simulation import SimulationResult
-from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, at_posture, limiting_key
+from casadi_posture.simulation import SimulationResult, torque_model
+from casadi_posture.static import STRENGTH_PCT_MVC, StaticAnswer, capable_shares, limiting_key
 
 
 def static_row(answer: StaticAnswer) -> dict[str, Any]:
@@ -69,7 +69,9 @@ def simulation_row(result: SimulationResult) -> dict[str, Any]:
         _reach(task["held_at_start"], task["level1_residual_at_start"], task["level1_unit"])
         | _endurance(start, _regions(result.problem.body))
         | _capable(
-            at_posture(result.problem, result.timeline.q[0]).capable
+            capable_shares(
+                result.problem, torque_model(result.problem).evaluate(result.timeline.q[0])
+            )
             if result.timeline.time.size
             else None
         )
