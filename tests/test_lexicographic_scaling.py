@@ -198,6 +198,23 @@ def test_an_iteration_limit_below_sqps_leaves_ipopt_alone() -> None:
     limited = LexicographicOptions(max_iterations=lexicographic.SQP_MAX_ITERATIONS - 1)
     solver = LexicographicSolver(hierarchy, limited)
     result = solver.solve(reaching + math.radians(0.5))
-    assert all(sqp is None for _, sqp in (solver._level(k) for k in range(2)))
+    assert all(solver._level(k).sqp is None for k in range(2))
     assert set(solver.methods) == {"ipopt"}
     assert result.success, result.status
+
+
+def test_a_level_sqp_settles_builds_no_ipopt() -> None:
+    """From a start next to the answer SQP settles every level and no IPOPT is built (its
+    build is half a cold start's); from the far start IPOPT is built and used."""
+    hierarchy, reaching = _reach_and_rest(7, 6)
+    far = LexicographicSolver(hierarchy)
+    answer = far.solve(reaching)
+    assert answer.success, answer.status
+    assert any("ipopt" in m for m in far.methods)
+    assert any(far._level(k).ipopt is not None for k in range(hierarchy.depth))
+    solver = LexicographicSolver(hierarchy)
+    near = solver.solve(answer.q + 1e-4)
+    assert near.success, near.status
+    assert set(solver.methods) == {"sqp"}
+    assert all(solver._level(k).ipopt is None for k in range(hierarchy.depth + 1))
+    np.testing.assert_allclose(near.q, answer.q, atol=1e-6)
