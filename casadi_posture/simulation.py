@@ -694,7 +694,8 @@ def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: fl
             state.fallbacks += 1
     state.ik_time += time.perf_counter() - tic
     state.failures += not result.success
-    state.drift = None if inequality is None or owner is None else (owner, state.q)
+    moving = inequality is not None and owner is not None and result.success
+    state.drift = (owner, state.q) if moving else None
     state.result, state.q = result, result.q
 
 
@@ -705,7 +706,7 @@ def _predicted(
     group's load bound moves the posture step after step, the last posture plus the last
     step's change, within the joint limits (the secant predictor of continuation methods).
     None (start from the last posture) at the bound's first step, when its owner changes,
-    without one, and under the paper's strategies.
+    without one, after a step the IK failed, and under the paper's strategies.
 
     Converged answers agree to the solvers' tolerances (tests/test_warm_start.py). On the
     20-minute standing wall hold the IK spends 357 instead of 1387 nullspace iterations
