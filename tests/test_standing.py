@@ -171,3 +171,17 @@ def test_a_shelf_out_of_reach_is_flagged_by_both_solvers() -> None:
         assert not any(f.startswith("level 3") for f in answer.flags)  # comfort: a criterion
     reachable = solve(load_problem(PROBLEMS / "standing_shelf_box.toml"))
     assert not any(f.startswith("level") for f in reachable.flags)
+
+
+def test_the_balance_margin_by_hand() -> None:
+    """A unit square: a point inside is as far from the polygon's edge as from its nearest
+    side, one outside as far (negative) as from the nearest point of the boundary, a corner
+    included; on the edge, zero."""
+    from casadi_posture.body.support import margin
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])  # counter-clockwise
+    assert margin(square, np.array([0.5, 0.5])) == pytest.approx(0.5)
+    assert margin(square, np.array([0.2, 0.7])) == pytest.approx(0.2)
+    assert margin(square, np.array([1.3, 0.5])) == pytest.approx(-0.3)
+    assert margin(square, np.array([1.3, 1.4])) == pytest.approx(-0.5)  # 0.3-0.4-0.5 corner
+    assert margin(square, np.array([1.0, 0.4])) == pytest.approx(0.0, abs=1e-15)

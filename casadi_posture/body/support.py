@@ -149,17 +149,15 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
 def margin(polygon: np.ndarray, point: np.ndarray) -> float:
     """Signed distance [m] of a floor ``point`` (x, y) to the edge of a counter-clockwise
     convex ``polygon``: positive inside, negative outside."""
-    inside, outside = np.inf, 0.0
-    for a, b in zip(polygon, np.roll(polygon, -1, axis=0), strict=True):
-        edge = b - a
-        length = float(np.hypot(*edge))
-        normal = np.array([-edge[1], edge[0]]) / length
-        along = float(np.clip(np.dot(point - a, edge) / length**2, 0.0, 1.0))
-        distance = float(np.hypot(*(point - (a + along * edge))))
-        if np.dot(point - a, normal) < 0:
-            outside = max(outside, distance)
-        inside = min(inside, distance)
-    return -outside if outside > 0 else inside
+    a = np.asarray(polygon, dtype=float)
+    edge = np.roll(a, -1, axis=0) - a
+    square = np.einsum("ij,ij->i", edge, edge)
+    to_point = np.asarray(point, dtype=float) - a
+    along = np.clip(np.einsum("ij,ij->i", to_point, edge) / square, 0.0, 1.0)
+    distance = np.hypot(*(to_point - along[:, None] * edge).T)
+    beyond = to_point[:, 1] * edge[:, 0] - to_point[:, 0] * edge[:, 1] < 0  # right of the edge
+    outside = float(distance[beyond].max()) if beyond.any() else 0.0
+    return -outside if outside > 0 else float(distance.min())
 
 
 class Support:

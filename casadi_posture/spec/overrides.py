@@ -71,8 +71,9 @@ def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) 
     if not isinstance(overrides, Mapping):
         raise ProblemError(path, "overrides", overrides, "a mapping of dotted keys to values")
     out = deepcopy(raw)
+    parsed = {key: parse_key(key) for key in overrides}
     for key, value in overrides.items():
-        parts = parse_key(key)
+        parts = parsed[key]
         node: Any = out
         for depth, part in enumerate(parts[:-1]):
             nxt = parts[depth + 1]
@@ -91,7 +92,7 @@ def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) 
         elif not isinstance(node, dict):
             raise ProblemError(path, key, value, "a key inside a table")
         if last in STRENGTH_KEYS:
-            given = {parse_key(k)[-1] for k in overrides if parse_key(k)[:-1] == parts[:-1]}
+            given = {other[-1] for other in parsed.values() if other[:-1] == parts[:-1]}
             for other in set(STRENGTH_KEYS) - given:
                 node.pop(other, None)
         node[last] = value
