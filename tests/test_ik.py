@@ -176,3 +176,24 @@ def test_a_level_never_ends_farther_from_its_task_than_its_feasible_start() -> N
     assert result.success, result.status
     assert before < 1e-7
     assert result.residuals[0] <= before
+
+
+def test_a_subset_of_levels_is_the_hierarchy_of_those_levels() -> None:
+    """``TaskHierarchy.subset`` (the whole-body adjustment's kept levels and comfort level,
+    on the expressions already built) evaluates as a hierarchy built of those tasks alone,
+    on the body's numbers and on its shape (the person's values bound)."""
+    from casadi_posture import simulation
+    from casadi_posture.problem import load_problem
+
+    problem = load_problem(PROBLEMS / "standing_wall_horizontal.toml")
+    whole = problem.hierarchy()
+    keep = [0, 1, whole.depth - 1]
+    fresh = TaskHierarchy(problem.body, [t for k in keep for t in whole.levels[k]])
+    shaped = simulation._built(problem, 2).whole_body.kept_hierarchy
+    rng = np.random.default_rng(5)
+    for q in rng.uniform(problem.body.lower, problem.body.upper, (4, problem.body.n)):
+        want = fresh.function(q, fresh.targets)
+        for sub in (whole.subset(keep), shaped):
+            assert sub.level_names() == fresh.level_names()
+            for got, expected in zip(sub.function(q, sub.targets), want, strict=True):
+                np.testing.assert_allclose(np.asarray(got), np.asarray(expected), atol=1e-10)

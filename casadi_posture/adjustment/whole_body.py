@@ -51,8 +51,7 @@ class WholeBodyAdjustment:
         if not isinstance(comfort, Comfort) or not comfort.measure.effort:
             raise ValueError("the whole-body adjustment needs a comfort level that counts effort")
         self.kept = keep_levels if 0 < keep_levels < hierarchy.depth else hierarchy.depth - 1
-        tasks = [t for level in hierarchy.levels[: self.kept] for t in level] + [comfort]
-        self.kept_hierarchy = TaskHierarchy(body, tasks, hierarchy.shape)
+        self.kept_hierarchy = hierarchy.subset([*range(self.kept), hierarchy.depth - 1])
         self._bind(hierarchy, self.kept_hierarchy)
         self.k = k
         signs = np.array([h.sign for h in body.half_joints], dtype=float)

@@ -78,16 +78,39 @@ class TaskHierarchy:
             self.residuals.append(ca.vertcat(*parts))
             self.blocks.append(blocks)
         self.jacobians = [ca.jacobian(e, body.q) for e in self.residuals]
+        self._compile()
+
+    def _compile(self) -> None:
+        """``function`` of the levels' residuals and Jacobians, in one call."""
         self._residuals: Compiled | None = None
         self.sizes = [e.numel() for e in self.residuals]
         self.function = ca.Function(
             "levels",
-            [body.q, self.p],
+            [self.body.q, self.p],
             self.residuals + self.jacobians,
             ["q", "targets"],
             [f"e{k + 1}" for k in range(len(self.levels))]
             + [f"J{k + 1}" for k in range(len(self.levels))],
         )
+
+    def subset(self, keep: Sequence[int]) -> TaskHierarchy:
+        """The hierarchy of the levels ``keep`` (indices, in order) of this one, their
+        parameters and the shape's in ``p``: its expressions are this one's (nothing is
+        differentiated again), one function is compiled."""
+        other = copy.copy(self)
+        for name in ("levels", "priorities", "residuals", "jacobians", "blocks"):
+            setattr(other, name, [getattr(self, name)[k] for k in keep])
+        pieces, targets, other._offsets = [], [], {}
+        for task in (t for level in other.levels for t in level):
+            start, size = self._offsets[task.name], task.targets().size
+            other._offsets[task.name] = sum(piece.numel() for piece in pieces)
+            pieces.append(self.p[start : start + size])
+            targets.append(self.targets[start : start + size])
+        tail = self.targets.size - self.shape_values().size
+        other.p = ca.vertcat(*pieces, self.p[tail:])
+        other.targets = np.concatenate([*targets, self.targets[tail:]])
+        other._compile()
+        return other
 
     def copy(self) -> TaskHierarchy:
         """The same compiled hierarchy with target values of its own (a run sets some in
