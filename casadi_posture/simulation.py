@@ -40,6 +40,8 @@ from casadi_posture.biomech.shape import Shape, numbers, scalable
 from casadi_posture.biomech.torques import TorqueModel, Torques
 from casadi_posture.body.loads import LOAD_PARAMETERS
 from casadi_posture.body.support import Support
+from casadi_posture.body.tree import BodyModel
+from casadi_posture.compiled import Compiled
 from casadi_posture.data import parameters
 from casadi_posture.errors import ProblemError
 from casadi_posture.ik.hierarchy import Inequality, TaskHierarchy
@@ -370,7 +372,7 @@ def _replay_setup(problem: Problem) -> _Setup:
         FatigueConstraint(problem.body, problem.passive, settings),
         effector,
         line,
-        ca.Function("effector", [problem.body.q], [problem.body.landmark(effector)]),
+        _effector(problem.body, effector),
         [h.name for h in problem.body.half_joints],
         "" if hierarchy is None else hierarchy.level_names()[0],
         math.nan,
@@ -397,7 +399,7 @@ class _Setup:
     constraint: FatigueConstraint
     effector: str
     line: Line | None
-    position: ca.Function
+    position: Compiled
     names: list[str]
     top: str
     dt: float
@@ -589,7 +591,7 @@ def _setup(problem: Problem, solver: str | None) -> _Setup:
         constraint,
         effector,
         line,
-        ca.Function("effector", [body.q], [body.landmark(effector)]),
+        _effector(body, effector),
         [h.name for h in body.half_joints],
         hierarchy.level_names()[0],
         spec.simulation.time_step_s,
@@ -874,8 +876,14 @@ def _timeline(run: _Setup, record: _Recorder, held: np.ndarray | None = None) ->
     )
 
 
+def _effector(body: BodyModel, name: str) -> Compiled:
+    """The landmark ``name``'s position [m] as a compiled ``x(q)`` (a call a step: 2 µs in
+    buffers instead of 30 µs as a CasADi call)."""
+    return Compiled(ca.Function("effector", [body.q], [body.landmark(name)], ["q"], ["x"]))
+
+
 def _row(
-    position: ca.Function,
+    position: Compiled,
     constraint: FatigueConstraint,
     now: float,
     q: np.ndarray,
@@ -893,7 +901,7 @@ def _row(
     return {
         "time": now,
         "q": q,
-        "effector": np.asarray(position(q)).ravel(),
+        "effector": position(q=q)["x"].copy(),
         "external": idle if torques is None else torques.external,
         "passive": idle if torques is None else torques.passive,
         "active": idle if torques is None else torques.active,
