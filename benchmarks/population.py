@@ -10,7 +10,8 @@ worker, the speed-up over one core, the time 1000 workers would take at that rat
 largest resident memory of the process that ran the workers (this one, then each worker
 process, sampled with psutil, which the dask extra installs). Targets (issue 24): 1000
 workers in at most 10 minutes on 2 cores, at least 1.8 times one core's throughput, at most
-300 MB per worker.
+300 MB per worker. Measure them with ``--n 75`` (150 workers): with a few dozen, each
+process's start (its imports and its one build, about 1.5 s) weighs on the speed-up.
 """
 
 from __future__ import annotations
