@@ -679,12 +679,12 @@ def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: fl
     )
     state.before = inequality
     owner = run.constraint.owner
-    start = _predicted(run, state, inequality, owner)
     if unchanged:
         state.reused += 1
     else:
         kept = run.kept_solvers is not None and owner is not None
         solvers = run.kept_solvers if kept else run.solvers
+        start = _predicted(run, state, inequality, owner)
         result, spent, detail = _solve_step(
             solvers, state.q, inequality, retry=state.held, start=start
         )
@@ -933,12 +933,16 @@ def _solve_step(
     other achieves. Its answer is kept when it succeeds and the first did not, or when it
     achieves level 1 and the first did not. While level 1 stays lost the first solver's
     answer stands, so a task broken for good costs one solve a step."""
+
+    def stands(answer: IKResult) -> bool:
+        return answer.success and (answer.achieved[0] or not retry)
+
     result = solvers.primary.solve(q if start is None else start, inequality)
     spent = result.iterations
-    if start is not None and not (result.success and (result.achieved[0] or not retry)):
+    if start is not None and not stands(result):
         result = solvers.primary.solve(q, inequality)
         spent += result.iterations
-    if result.success and (result.achieved[0] or not retry):
+    if stands(result):
         return result, spent, ""
     other = solvers.fallback().solve(q, inequality)
     spent += other.iterations

@@ -83,19 +83,16 @@ class WholeBodyAdjustment:
         ]
 
     def rebind(
-        self, hierarchy: TaskHierarchy, *, k: float, torque_model: TorqueModel | None = None
+        self, hierarchy: TaskHierarchy, *, k: float, torque_model: TorqueModel
     ) -> WholeBodyAdjustment:
-        """This adjustment, its compiled functions shared, on ``hierarchy`` (a copy of the
-        one it was built on, or its ``rebound`` for another person) with a copy of its kept
-        levels and the weight ``k``; for another person, their ``torque_model`` (the
-        ``rebound`` of the one it was built on)."""
+        """This adjustment, its compiled functions shared, on ``hierarchy`` (the ``rebound``
+        of the one it was built on, for this run's person) with its kept levels rebound
+        alike, the weight ``k`` and the person's ``torque_model`` (the ``rebound`` of the
+        one it was built on)."""
         other = copy.copy(self)
-        kept = self.kept_hierarchy.copy()
-        if torque_model is not None:
-            tasks = [t for level in hierarchy.levels for t in level]
-            kept = self.kept_hierarchy.rebound(tasks, hierarchy.shape_values())
-            other._packed = torque_model.default_loads
-        other._bind(hierarchy, kept)
+        tasks = [t for level in hierarchy.levels for t in level]
+        other._bind(hierarchy, self.kept_hierarchy.rebound(tasks, hierarchy.shape_values()))
+        other._packed = torque_model.default_loads
         other.k = k
         return other
 

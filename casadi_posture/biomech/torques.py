@@ -112,8 +112,8 @@ class TorqueModel:
         simulation nothing tires in) gets a copy of it. (One model per thread: it evaluates
         in buffers of its own.)"""
         p = self.default_loads
-        if loads is not None:
-            p = np.concatenate([loads, p[self._own :]]) if p.size > self._own else loads
+        if loads is not None:  # the shape's values follow the loads
+            p = np.concatenate([loads, p[self._own :]])
         key = (np.asarray(q, dtype=float).tobytes(), np.asarray(p, dtype=float).tobytes())
         if self._last is None or self._last[0] != key:
             self._last = (key, self._evaluate(q, p))

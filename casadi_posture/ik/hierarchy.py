@@ -59,7 +59,7 @@ class TaskHierarchy:
         own = np.concatenate(values) if values else np.zeros(0)
         symbols, numbers = shape if shape is not None else (ca.SX(0, 1), np.zeros(0))
         self.targets = np.concatenate([own, numbers])
-        self.shape = shape
+        self._shape_size = numbers.size
         self.p = ca.vertcat(ca.SX.sym("targets", own.size), symbols)
         self.residuals: list[ca.SX] = []
         self.blocks: list[list[tuple[Task, slice]]] = []
@@ -100,13 +100,13 @@ class TaskHierarchy:
         other = copy.copy(self)
         for name in ("levels", "priorities", "residuals", "jacobians", "blocks"):
             setattr(other, name, [getattr(self, name)[k] for k in keep])
-        pieces, targets, other._offsets = [], [], {}
+        pieces, targets, other._offsets, offset = [], [], {}, 0
         for task in (t for level in other.levels for t in level):
             start, size = self._offsets[task.name], task.targets().size
-            other._offsets[task.name] = sum(piece.numel() for piece in pieces)
+            other._offsets[task.name], offset = offset, offset + size
             pieces.append(self.p[start : start + size])
             targets.append(self.targets[start : start + size])
-        tail = self.targets.size - self.shape_values().size
+        tail = self.targets.size - self._shape_size
         other.p = ca.vertcat(*pieces, self.p[tail:])
         other.targets = np.concatenate([*targets, self.targets[tail:]])
         other._compile()
@@ -135,11 +135,7 @@ class TaskHierarchy:
 
     def shape_values(self) -> np.ndarray:
         """The values of the shape's symbols in ``targets`` (none without a shape)."""
-        return (
-            self.targets[self.targets.size - self.shape[1].size :]
-            if self.shape
-            else self.targets[:0]
-        )
+        return self.targets[self.targets.size - self._shape_size :]
 
     def offset(self, task: Task) -> int:
         """Where ``task``'s parameters start in ``targets``."""
