@@ -17,8 +17,9 @@ from click.testing import CliRunner
 
 from casadi_posture import api, interrupt
 from casadi_posture.cli import main
-from casadi_posture.output.html_body import placements, rounded
+from casadi_posture.output.html_body import placements
 from casadi_posture.output.html_report import frame_steps, shown_groups, write_report
+from casadi_posture.output.plotly_json import rounded
 from casadi_posture.output.scene import Scene
 from casadi_posture.output.skeleton import Skeleton
 from tests.browser import mesh_of, open_page, pixels_of
@@ -55,6 +56,23 @@ def test_the_slider_shows_every_event_and_at_most_the_limit_besides() -> None:
 
 def test_numbers_keep_four_significant_digits() -> None:
     assert rounded([1234.5678, 0.000123456, -2.0, float("nan")]) == [1235.0, 0.0001235, -2.0, None]
+    assert rounded([[0.0, float("inf")], [-0.0, 99999.0]]) == [[0.0, None], [-0.0, 1e5]]
+
+
+def test_rounding_in_arrays_gives_the_decimal_formatting_s_numbers() -> None:
+    """The page's numbers are rounded for all of them at once; each is the double Python's
+    own formatting to 4 (or 6) significant digits gives, so it prints as short."""
+    rng = np.random.default_rng(7)
+    values = rng.uniform(-1, 1, 20000) * 10.0 ** rng.integers(-12, 13, 20000)
+    for digits in (4, 6):
+        expected = [float(f"{v:.{digits}g}") for v in values]
+        got = rounded(values, digits)
+        differ = [(e, g) for e, g in zip(expected, got, strict=True) if e != g]
+        # only a tie can round the other way (a value a few ulps from ...5 at the last digit)
+        assert len(differ) <= 2, differ[:5]
+        assert all(abs(e - g) <= 10 ** (np.floor(np.log10(abs(e))) - digits + 2) for e, g in differ)
+        mantissas = [repr(abs(g)).split("e")[0].replace(".", "").strip("0") for g in got]
+        assert max(len(m) for m in mantissas) <= digits  # printed short: no 0.12340000000001
 
 
 def test_the_curves_show_the_groups_that_tire_most(standing) -> None:
@@ -64,6 +82,20 @@ def test_the_curves_show_the_groups_that_tire_most(standing) -> None:
     assert len(shown) == 8 and halves[shown[0]] == "shoulder_flexors_r"
     peaks = tl.fatigue.max(axis=0)
     assert peaks[shown].min() >= np.sort(peaks)[-8]  # no group left out tires more
+
+
+def test_the_mannequin_s_extent_is_that_of_every_point_placed(standing) -> None:
+    """The box and the mean of the mannequin's points over many postures, summed without
+    placing each point, against every point placed."""
+    run, _, _ = standing
+    skeleton = Skeleton(run.result.problem.body, run.result.timeline.q)
+    steps = [0, 120, 250, 299]
+    every = np.vstack([p.reshape(-1, 3) for s in steps for p in skeleton.solids(s)])
+    lo, hi, total, count = skeleton.solids_extent(steps)
+    assert count == len(every)
+    np.testing.assert_allclose(lo, every.min(axis=0), atol=1e-12)
+    np.testing.assert_allclose(hi, every.max(axis=0), atol=1e-12)
+    np.testing.assert_allclose(total / count, every.mean(axis=0), atol=1e-12)
 
 
 def test_the_placements_move_the_mannequin_where_the_skeleton_puts_it(standing) -> None:

@@ -5,20 +5,16 @@ script needs to move it there (each body frame's placement, the moving traces' p
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import casadi as ca
 import numpy as np
-import plotly.graph_objects as go
 from matplotlib.colors import to_hex
 
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.output.mannequin import CONTEXT, fill
+from casadi_posture.output.plotly_json import rounded, template
 from casadi_posture.output.scene import EDGE, SUPPORT, Scene, clip_line, plane_polygon
-
-#: Significant digits of the numbers in a page.
-DIGITS = 4
 
 #: The body's colour (its task limbs a deeper shade).
 BODY_COLOUR = "#1f77b4"
@@ -26,13 +22,6 @@ BODY_COLOUR = "#1f77b4"
 #: Height [m] above the floor of what is drawn on it (the support polygon, the centre of
 #: mass's projection): on the floor itself, the floor would hide it.
 LIFT = 0.003
-
-
-def rounded(values: Any, digits: int = DIGITS) -> Any:
-    """Numbers (nested lists or arrays) to ``digits`` significant digits; NaN as None."""
-    array = np.asarray(values, dtype=float)
-    flat = [None if not math.isfinite(v) else float(f"{v:.{digits}g}") for v in array.ravel()]
-    return np.array(flat, dtype=object).reshape(array.shape).tolist()
 
 
 def placements(body: BodyModel, q: np.ndarray, frames: list[str | None], steps: np.ndarray):
@@ -46,7 +35,7 @@ def placements(body: BodyModel, q: np.ndarray, frames: list[str | None], steps: 
     return placed.reshape(len(frames), 3, len(q), 4).transpose(2, 0, 1, 3)
 
 
-def _mesh_traces(scene: Scene, steps: np.ndarray) -> tuple[list[go.Mesh3d], list[dict], list]:
+def _mesh_traces(scene: Scene, steps: np.ndarray) -> tuple[list[dict], list[dict], list]:
     """The mannequin as three surfaces (context parts, the rest, the task limbs), their
     parts' zero-posture points and frames for the page's script, and the frames'
     placements at ``steps``."""
@@ -80,11 +69,12 @@ def _mesh_traces(scene: Scene, steps: np.ndarray) -> tuple[list[go.Mesh3d], list
             start += rings * n
         i, j, k = np.vstack(ijk).T.tolist()
         traces.append(
-            go.Mesh3d(
-                x=[], y=[], z=[], i=i, j=j, k=k, name=name, color=to_hex(colours[name][:3]),
-                flatshading=False, hoverinfo="name", showlegend=False,
-                lighting={"ambient": 0.55, "diffuse": 0.7, "specular": 0.15, "roughness": 0.6},
-            )
+            {
+                "type": "mesh3d", "x": [], "y": [], "z": [], "i": i, "j": j, "k": k, "name": name,
+                "color": to_hex(colours[name][:3]), "flatshading": False, "hoverinfo": "name",
+                "showlegend": False,
+                "lighting": {"ambient": 0.55, "diffuse": 0.7, "specular": 0.15, "roughness": 0.6},
+            }
         )  # fmt: skip
         meshes.append({"zero": rounded(np.vstack(zero).ravel()), "parts": spans})
     return (
@@ -99,35 +89,38 @@ def _points(points: np.ndarray) -> dict[str, list]:
     return {axis: rounded(points[..., a]) for a, axis in enumerate("xyz"[: points.shape[-1]])}
 
 
-def body_figure(scene: Scene, steps: np.ndarray) -> tuple[go.Figure, dict[str, Any]]:
-    """The body's view: in 3-D, or in the plane of a planar body; and the data that moves
-    it to each of ``steps`` (traces by index)."""
+def body_figure(scene: Scene, steps: np.ndarray) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The body's view (a plotly figure's data): in 3-D, or in the plane of a planar body;
+    and the data that moves it to each of ``steps`` (traces by index)."""
     skeleton = scene.skeleton
     three = not scene.problem.body.planar
     axes = [0, 1, 2] if three else list(skeleton.plane)
     names = ("x forward (m)", "y left (m)", "z up (m)")
-    Trace = go.Scatter3d if three else go.Scatter
+    kind = "scatter3d" if three else "scatter"
 
-    def trace(name: str, **style: Any) -> Any:
-        return Trace(**{"xyz"[a]: [] for a in range(len(axes))}, name=name, **style)
+    def trace(name: str, **style: Any) -> dict[str, Any]:
+        return {"type": kind, **{"xyz"[a]: [] for a in range(len(axes))}, "name": name, **style}
 
-    fig, moving = go.Figure(), []
+    data: list[dict[str, Any]] = []
+    moving: list[tuple[dict[str, Any], dict[str, list]]] = []
     lo, hi = scene.lo, scene.hi
     if three and scene.floor:
-        fig.add_trace(
-            go.Mesh3d(
-                x=[lo[0], hi[0], hi[0], lo[0]], y=[lo[1], lo[1], hi[1], hi[1]], z=[0.0] * 4,
-                i=[0, 0], j=[1, 2], k=[2, 3], color="#ececec", name="floor", hoverinfo="skip",
-                showlegend=False, lighting={"ambient": 1.0, "diffuse": 0.0},
-            )
+        data.append(
+            {
+                "type": "mesh3d", "x": [lo[0], hi[0], hi[0], lo[0]],
+                "y": [lo[1], lo[1], hi[1], hi[1]], "z": [0.0] * 4, "i": [0, 0], "j": [1, 2],
+                "k": [2, 3], "color": "#ececec",
+                "name": "floor", "hoverinfo": "skip", "showlegend": False,
+                "lighting": {"ambient": 1.0, "diffuse": 0.0},
+            }
         )  # fmt: skip
     for shape in scene.shapes:
-        fig.add_traces(_shape_traces(shape, scene, axes))
+        data += _shape_traces(shape, scene, axes)
     meshes, placed = [], []
     if skeleton.parts and three:
         traces, meshes, placed = _mesh_traces(scene, steps)
-        first = len(fig.data)
-        fig.add_traces(traces)
+        first = len(data)
+        data += traces
         for k, mesh in enumerate(meshes):
             mesh["trace"] = first + k
     else:
@@ -166,12 +159,14 @@ def body_figure(scene: Scene, steps: np.ndarray) -> tuple[go.Figure, dict[str, A
         arrow = np.stack([start, end], axis=1)[..., axes]
         style = {"color": "#444444", "width": 6} if three else {"color": "#444444", "width": 3}
         marker = {"symbol": "diamond" if three else "triangle-down", "size": 5 if three else 10}
-        line = trace(f"load {load.name}: {what} at {at}", mode="lines+markers", line=style)
-        line.marker = {**marker, "color": "#444444"}
+        line = trace(
+            f"load {load.name}: {what} at {at}", mode="lines+markers", line=style,
+            marker={**marker, "color": "#444444"},
+        )  # fmt: skip
         moving.append((line, _points(arrow)))
-    first = len(fig.data)
-    fig.add_traces([t for t, _ in moving])
-    data = {
+    first = len(data)
+    data += [t for t, _ in moving]
+    moves = {
         "three": three,
         "meshes": meshes,
         "placements": placed,
@@ -179,7 +174,11 @@ def body_figure(scene: Scene, steps: np.ndarray) -> tuple[go.Figure, dict[str, A
     }
     spans = hi - lo
     legend = {"orientation": "h", "x": 0.0, "y": 0.0, "yanchor": "top", "font": {"size": 11}}
-    layout: dict[str, Any] = {"margin": {"l": 0, "r": 0, "t": 10, "b": 10}, "legend": legend}
+    layout: dict[str, Any] = {
+        "template": template("plotly"),
+        "margin": {"l": 0, "r": 0, "t": 10, "b": 10},
+        "legend": legend,
+    }
     if three:
         scale = spans / spans.max()
         layout["scene"] = {
@@ -199,8 +198,7 @@ def body_figure(scene: Scene, steps: np.ndarray) -> tuple[go.Figure, dict[str, A
         }  # fmt: skip
         layout["margin"] = {"l": 60, "r": 10, "t": 10, "b": 40}
         legend["y"] = -0.1  # below the x axis' title
-    fig.update_layout(**layout)
-    return fig, data
+    return {"data": data, "layout": layout}, moves
 
 
 def _closed(polygon: np.ndarray | None) -> np.ndarray:
@@ -211,30 +209,32 @@ def _closed(polygon: np.ndarray | None) -> np.ndarray:
     return np.c_[ring, np.full(len(ring), LIFT)]
 
 
-def _shape_traces(shape: Any, scene: Scene, axes: list[int]) -> list[Any]:
+def _shape_traces(shape: Any, scene: Scene, axes: list[int]) -> list[dict[str, Any]]:
     """A task's target: a point as a cross, a line dashed, a plane translucent (in 3-D)."""
     three = len(axes) == 3
     name = f"target: {shape.name}" if shape.kind == "point" else f"task {shape.kind}: {shape.name}"
     style = {"color": "#555555"}
+    kind = "scatter3d" if three else "scatter"
     if shape.kind == "point":
         coords = {"xyz"[n]: [float(shape.point[a])] for n, a in enumerate(axes)}
         marker = {"symbol": "x", "size": 5 if three else 12, **style}
-        kind = go.Scatter3d if three else go.Scatter
-        return [kind(**coords, mode="markers", marker=marker, name=name)]
+        return [{"type": kind, **coords, "mode": "markers", "marker": marker, "name": name}]
     if shape.kind == "line":
         ends = clip_line(shape.point, shape.vector, scene.lo, scene.hi)
         if ends is None:
             return []
         coords = {"xyz"[n]: ends[:, a].tolist() for n, a in enumerate(axes)}
-        kind = go.Scatter3d if three else go.Scatter
-        return [kind(**coords, mode="lines", line={**style, "dash": "dash"}, name=name)]
+        line = {**style, "dash": "dash"}
+        return [{"type": kind, **coords, "mode": "lines", "line": line, "name": name}]
     corners = plane_polygon(shape.point, shape.vector, scene.lo, scene.hi)
     if corners is None or not three:
         return []
     fan = np.arange(1, len(corners) - 1)
     return [
-        go.Mesh3d(
-            x=corners[:, 0], y=corners[:, 1], z=corners[:, 2], i=[0] * len(fan), j=fan, k=fan + 1,
-            color="#888888", opacity=0.15, name=name, showlegend=True, hoverinfo="name",
-        )
+        {
+            "type": "mesh3d", "x": corners[:, 0].tolist(), "y": corners[:, 1].tolist(),
+            "z": corners[:, 2].tolist(), "i": [0] * len(fan), "j": fan.tolist(),
+            "k": (fan + 1).tolist(), "color": "#888888", "opacity": 0.15, "name": name,
+            "showlegend": True, "hoverinfo": "name",
+        }
     ]  # fmt: skip

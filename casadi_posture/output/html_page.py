@@ -7,26 +7,49 @@ from __future__ import annotations
 import base64
 import gzip
 import html
+import json
 import math
+import os
 from collections.abc import Sequence
 from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from plotly.offline import get_plotlyjs
-
+from casadi_posture.output.plotly_json import plotly_js, version
 from casadi_posture.problem import Problem
 
 
 @cache
 def plotly_gzip() -> str:
-    """plotly.js, gzip-compressed and base64-encoded (about 1.9 MB instead of 4.8)."""
-    return base64.b64encode(gzip.compress(get_plotlyjs().encode(), 9, mtime=0)).decode()
+    """plotly.js, gzip-compressed and base64-encoded (about 1.9 MB instead of 4.8). Kept
+    in the user's cache folder per plotly version (compressing takes 0.2 s); made again
+    when that copy is missing or cannot be written."""
+    cached = _cache_folder() / f"plotly-{version()}.min.js.gz.b64"
+    try:
+        return cached.read_text(encoding="ascii")
+    except OSError:
+        pass
+    text = base64.b64encode(gzip.compress(plotly_js().encode(), 9, mtime=0)).decode()
+    try:
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        partial = cached.with_name(f"{cached.name}.{os.getpid()}.partial")
+        partial.write_text(text, encoding="ascii")
+        partial.replace(cached)  # whole or not at all, if two runs write it at once
+    except OSError:
+        pass
+    return text
 
 
-def inline(text: str) -> str:
-    """JSON safe inside a <script> element."""
+def _cache_folder() -> Path:
+    """casadi_posture's folder in the user's cache (XDG_CACHE_HOME, else ~/.cache)."""
+    root = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(root) / "casadi_posture"
+
+
+def script_json(value: Any) -> str:
+    """``value`` as compact JSON, safe inside a <script> element (no NaN: missing is null)."""
+    text = json.dumps(value, separators=(",", ":"), allow_nan=False)
     return text.replace("</", "<\\/")
 
 

@@ -13,22 +13,18 @@ the 29-DOF body stays near 2.5 MB."""
 from __future__ import annotations
 
 import html
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import plotly
-import plotly.graph_objects as go
-from plotly.subplots import make_subplots
 
 from casadi_posture.biomech.low_back import limits as back_limits
-from casadi_posture.output.html_body import body_figure, rounded
+from casadi_posture.output.html_body import body_figure
 from casadi_posture.output.html_page import (
     HEAD,
-    inline,
     plotly_gzip,
     problem_line,
+    script_json,
     scripts,
     write_page,
 )
@@ -36,6 +32,14 @@ from casadi_posture.output.key_postures import title
 from casadi_posture.output.low_back import run_lines as back_lines
 from casadi_posture.output.low_back import step_low_back
 from casadi_posture.output.outcome import outcome_lines
+from casadi_posture.output.plotly_json import (
+    axis_name,
+    hline,
+    rounded,
+    stacked_rows,
+    template,
+    version,
+)
 from casadi_posture.output.results import summary
 from casadi_posture.output.scene import Scene
 from casadi_posture.output.scores import run_lines as score_lines
@@ -93,9 +97,9 @@ def shown_groups(result: SimulationResult, limit: int = MAX_GROUPS) -> list[int]
 
 def _curves_figure(
     result: SimulationResult, steps: np.ndarray, scale: float, unit: str
-) -> tuple[go.Figure, list[str]]:
+) -> tuple[dict[str, Any], list[str]]:
     """The curves against time [``unit``; ``scale`` s per unit] at ``steps``, one row
-    each, and the rows' x axes (for the page's cursor)."""
+    each (a plotly figure's data), and the rows' x axes (for the page's cursor)."""
     tl, body = result.timeline, result.problem.body
     halves = [h.name for h in body.half_joints]
     groups = shown_groups(result)
@@ -107,111 +111,99 @@ def _curves_figure(
     rows += ["L5/S1 compression (N)"] if back is not None else []
     rows += ["RULA / REBA score"] if scores else []
     rows.append("events")
-    heights = [1.0] * (len(rows) - 1) + [0.6]
-    fig = make_subplots(
-        rows=len(rows), cols=1, shared_xaxes=True, vertical_spacing=0.035,
-        row_heights=heights, subplot_titles=rows,
-    )  # fmt: skip
+    layout, domains = stacked_rows(rows, [1.0] * (len(rows) - 1) + [0.6], spacing=0.035)
+    data: list[dict[str, Any]] = []
+    shapes: list[dict[str, Any]] = []
+
+    def add(row: int, **trace: Any) -> None:
+        data.append({"type": "scatter", **trace, "xaxis": axis_name("x", row),
+                     "yaxis": axis_name("y", row)})  # fmt: skip
+
+    def level(value: float, row: int, text: str, dash: str, colour: str, ink: str) -> None:
+        """A labelled horizontal line: ``colour`` the line's, ``ink`` its label's."""
+        shapes.append(hline(value, row, {"color": colour, "dash": dash, "width": 1}))
+        layout["annotations"].append(
+            {"text": text, "x": 1, "xref": f"{axis_name('x', row)} domain", "y": value,
+             "yref": axis_name("y", row), "showarrow": False, "xanchor": "right",
+             "yanchor": "bottom", "font": {"size": 9, "color": ink}}
+        )  # fmt: skip
+
     t = rounded(tl.time[steps] / scale, 6)
     for n, k in enumerate(groups):
-        colour = PALETTE[n % len(PALETTE)]
-        style = {"x": t, "mode": "lines", "line": {"color": colour, "width": 1.6}}
+        line = {"color": PALETTE[n % len(PALETTE)], "width": 1.6}
+        style = {"x": t, "mode": "lines", "line": line}
         group = {"legendgroup": halves[k], "name": halves[k]}
-        fig.add_trace(go.Scatter(y=rounded(tl.fatigue[steps, k]), **style, **group), 1, 1)
-        fig.add_trace(
-            go.Scatter(y=rounded(tl.load[steps, k]), **style, **group, showlegend=False), 2, 1
-        )
-    for level, value in (("fatigue threshold", result.settings.fatigue_threshold),
-                         ("recovery threshold", result.settings.recovery_threshold)):  # fmt: skip
-        fig.add_hline(y=value, line={"dash": "dot", "color": "#999999", "width": 1}, row=1, col=1)
-        fig.add_annotation(
-            text=level, x=1, xref="x domain", y=value, yref="y", showarrow=False,
-            xanchor="right", yanchor="bottom", font={"size": 9, "color": "#777777"},
-        )  # fmt: skip
+        add(1, y=rounded(tl.fatigue[steps, k]), **style, **group)
+        add(2, y=rounded(tl.load[steps, k]), **style, **group, showlegend=False)
+    for name, value in (("fatigue threshold", result.settings.fatigue_threshold),
+                        ("recovery threshold", result.settings.recovery_threshold)):  # fmt: skip
+        level(value, 1, name, "dot", "#999999", "#777777")
     floor = 1e-6
     for k, (name, unit_k) in enumerate(zip(result.level_names, result.level_units, strict=True)):
-        values = np.where(np.isnan(tl.residuals[steps, k]), np.nan, tl.residuals[steps, k])
-        fig.add_trace(
-            go.Scatter(
-                x=t, y=rounded(np.maximum(values, floor)), mode="lines", legend="legend2",
-                name=f"level {k + 1}: {name} ({unit_k})", line={"width": 1.4},
-            ),
-            3, 1,
-        )  # fmt: skip
+        add(3, x=t, y=rounded(np.maximum(tl.residuals[steps, k], floor)), mode="lines",
+            legend="legend2", name=f"level {k + 1}: {name} ({unit_k})",
+            line={"width": 1.4})  # fmt: skip
     if fitted and not result.level_names:
         for name, values in fitted[1].items():
-            fig.add_trace(
-                go.Scatter(x=t, y=rounded(np.maximum(values[steps], floor)), mode="lines",
-                           legend="legend2", name=name, line={"width": 1.2}),
-                3, 1,
-            )  # fmt: skip
-    fig.update_yaxes(type="log", row=3, col=1, exponentformat="power")
+            add(3, x=t, y=rounded(np.maximum(values[steps], floor)), mode="lines",
+                legend="legend2", name=name, line={"width": 1.2})  # fmt: skip
+    layout["yaxis3"] |= {"type": "log", "exponentformat": "power"}
     row = 4
     if back is not None:
-        fig.add_trace(
-            go.Scatter(x=t, y=rounded(back.compression[steps]), mode="lines", legend="legend3",
-                       name="compression", line={"color": "#8c564b"}),
-            row, 1,
-        )  # fmt: skip
+        add(row, x=t, y=rounded(back.compression[steps]), mode="lines", legend="legend3",
+            name="compression", line={"color": "#8c564b"})  # fmt: skip
         design = back_limits()["design"]
-        fig.add_hline(y=design, line={"dash": "dash", "color": "#d62728", "width": 1}, row=row)
-        fig.add_annotation(
-            text=f"NIOSH design limit {design:g} N", x=1, xref="x domain", y=design,
-            yref=f"y{row}", showarrow=False, xanchor="right", yanchor="bottom",
-            font={"size": 9, "color": "#d62728"},
-        )  # fmt: skip
+        level(design, row, f"NIOSH design limit {design:g} N", "dash", "#d62728", "#d62728")
         peak = float(np.nanmax(back.compression)) if np.isfinite(back.compression).any() else 0.0
-        fig.update_yaxes(range=[0, 1.1 * max(peak, design)], row=row, col=1)
+        layout[f"yaxis{row}"]["range"] = [0, 1.1 * max(peak, design)]
         row += 1
     if scores:
         for name, values in scores.items():
             shown = np.array([np.nan if v is None else v for v in values], dtype=float)[steps]
-            fig.add_trace(
-                go.Scatter(x=t, y=rounded(shown), mode="lines", legend="legend4",
-                           name=name.replace("_", " ").upper().replace(" R", " right")
-                           .replace(" L", " left"), line={"shape": "hv", "width": 1.4}),
-                row, 1,
-            )  # fmt: skip
-        fig.update_yaxes(range=[0, 15], row=row, col=1)
+            label = name.replace("_", " ").upper().replace(" R", " right").replace(" L", " left")
+            add(row, x=t, y=rounded(shown), mode="lines", legend="legend4", name=label,
+                line={"shape": "hv", "width": 1.4})  # fmt: skip
+        layout[f"yaxis{row}"]["range"] = [0, 15]
         row += 1
-    _events(fig, result, groups, scale, row)
-    fig.update_xaxes(title={"text": f"time ({unit})"}, row=row, col=1)
-    fig.update_yaxes(range=[0, 1.05], row=1, col=1)
-    fig.update_xaxes(showspikes=False)
+    data += _events(result, groups, scale, row, layout)
+    layout[f"xaxis{row}"]["title"] = {"text": f"time ({unit})"}
+    for r in range(1, row + 1):
+        layout[f"xaxis{r if r > 1 else ''}"]["showspikes"] = False
+    layout["yaxis"]["range"] = [0, 1.05]
     legends = {"legend": 1, "legend2": 3, "legend3": 4, "legend4": 4 + (back is not None)}
-    layout: dict[str, Any] = {
+    legends["legend5"] = row
+    for name, at in legends.items():
+        layout[name] = {"x": 1.01, "y": domains[at - 1][1], "yanchor": "top", "font": {"size": 10}}
+    layout |= {
+        "template": template("plotly_white"),
         "margin": {"l": 60, "r": 10, "t": 30, "b": 40},
         "hovermode": "x",
-        "template": "plotly_white",
         "font": {"size": 11},
+        "shapes": shapes,
     }
-    for name, at in legends.items():
-        domain = fig.layout[f"yaxis{at if at > 1 else ''}"].domain
-        layout[name] = {"x": 1.01, "y": domain[1], "yanchor": "top", "font": {"size": 10}}
-    layout["legend5"] = {"x": 1.01, "y": fig.layout[f"yaxis{row}"].domain[1], "yanchor": "top",
-                         "font": {"size": 10}}  # fmt: skip
-    fig.update_layout(**layout)
-    for annotation in fig.layout.annotations[: len(rows)]:
-        annotation.update(x=0, xanchor="left", font={"size": 12})
-    return fig, [f"x{r if r > 1 else ''}" for r in range(1, row + 1)]
+    return {"data": data, "layout": layout}, [axis_name("x", r) for r in range(1, row + 1)]
 
 
-def _events(fig: go.Figure, result: SimulationResult, groups: list[int], scale: float, row: int):
-    """The events: on their group's fatigue curve (when drawn) and, all of them, in a strip
-    of their own, one line per kind; the hover says what happened."""
+def _events(
+    result: SimulationResult, groups: list[int], scale: float, row: int, layout: dict[str, Any]
+) -> list[dict[str, Any]]:
+    """The events' traces: on their group's fatigue curve (when drawn) and, all of them, in
+    a strip of their own (row ``row``, a category axis set in ``layout``), one line per
+    kind; the hover says what happened."""
     tl, halves = result.timeline, [h.name for h in result.problem.body.half_joints]
     kinds = list(dict.fromkeys(e.kind for e in result.events))
+    strip = {"xaxis": axis_name("x", row), "yaxis": axis_name("y", row)}
+    traces = []
     for kind in kinds:
         chosen = [e for e in result.events if e.kind == kind]
         symbol, colour = MARKS.get(kind, ("circle", "#333333"))
         text = [f"{e.time_s:g} s: {e.kind} {e.half_joint} {e.detail}".strip() for e in chosen]
-        times = rounded([e.time_s / scale for e in chosen], 6)
         marker = {"symbol": symbol, "color": colour, "size": 9, "line": {"width": 1}}
-        fig.add_trace(
-            go.Scatter(x=times, y=[kind.replace("_", " ")] * len(chosen), mode="markers",
-                       marker=marker, text=text, hoverinfo="text", name=kind.replace("_", " "),
-                       legend="legend5", legendgroup=f"event {kind}"),
-            row, 1,
+        traces.append(
+            {"type": "scatter", "x": rounded([e.time_s / scale for e in chosen], 6),
+             "y": [kind.replace("_", " ")] * len(chosen), "mode": "markers", "marker": marker,
+             "text": text, "hoverinfo": "text", "name": kind.replace("_", " "),
+             "legend": "legend5", "legendgroup": f"event {kind}", **strip}
         )  # fmt: skip
         on_curves = [e for e in chosen if e.half_joint in halves and halves.index(e.half_joint)
                      in groups]  # fmt: skip
@@ -222,17 +214,15 @@ def _events(fig: go.Figure, result: SimulationResult, groups: list[int], scale: 
                              halves.index(e.half_joint)])
             for e in on_curves
         ]  # fmt: skip
-        fig.add_trace(
-            go.Scatter(
-                x=rounded([e.time_s / scale for e in on_curves], 6), y=rounded(at),
-                mode="markers", marker=marker, hoverinfo="text", showlegend=False,
-                text=[f"{e.time_s:g} s: {e.kind} {e.half_joint} {e.detail}" for e in on_curves],
-                legendgroup=f"event {kind}",
-            ),
-            1, 1,
+        traces.append(
+            {"type": "scatter", "x": rounded([e.time_s / scale for e in on_curves], 6),
+             "y": rounded(at), "mode": "markers", "marker": marker, "hoverinfo": "text",
+             "showlegend": False, "legendgroup": f"event {kind}", "xaxis": "x", "yaxis": "y",
+             "text": [f"{e.time_s:g} s: {e.kind} {e.half_joint} {e.detail}" for e in on_curves]}
         )  # fmt: skip
-    fig.update_yaxes(type="category", row=row, col=1, categoryarray=[k.replace("_", " ")
-                                                                      for k in kinds])  # fmt: skip
+    layout[f"yaxis{row}"] |= {"type": "category", "categoryarray": [k.replace("_", " ")
+                                                                     for k in kinds]}  # fmt: skip
+    return traces
 
 
 def summary_html(report: dict[str, Any]) -> str:
@@ -304,13 +294,13 @@ def report_html(result: SimulationResult) -> str:
     return PAGE.format(
         title=heading,
         subtitle=html.escape(
-            f"{problem_line(result.problem)} · {title(result)} · plotly {plotly.__version__}"
+            f"{problem_line(result.problem)} · {title(result)} · plotly {version()}"
         ),
         summary=summary_html(report),
         plotly=plotly_gzip(),
-        body=inline(body.to_json()),
-        curves=inline(curves.to_json()),
-        data=inline(json.dumps(data, separators=(",", ":"))),
+        body=script_json(body),
+        curves=script_json(curves),
+        data=script_json(data),
         frames=len(frames) - 1,
         script=scripts("viewer.js", "html_report.js"),
     )

@@ -7,7 +7,6 @@ loads, and the tables; with several cases, a table whose row picks the case show
 from __future__ import annotations
 
 import html
-import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -15,20 +14,19 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import plotly
-import plotly.graph_objects as go
 
 from casadi_posture.output import low_back
 from casadi_posture.output.html_body import body_figure
 from casadi_posture.output.html_page import (
     HEAD,
-    inline,
     plotly_gzip,
     problem_line,
+    script_json,
     scripts,
     table,
     write_page,
 )
+from casadi_posture.output.plotly_json import template, version
 from casadi_posture.output.report import HALF_JOINT_COLUMNS
 from casadi_posture.output.scene import Scene
 from casadi_posture.output.scores import lines as score_lines
@@ -51,7 +49,7 @@ class Case:
     lines: tuple[str, ...]
     flags: tuple[str, ...]
     tables: str
-    chart: go.Figure | None = None
+    chart: dict[str, Any] | None = None
 
 
 def solve_case(answer: StaticAnswer) -> Case:
@@ -135,7 +133,7 @@ def section(heading: str, content: str, *, closed: bool = False) -> str:
     return f"<h3>{html.escape(heading)}</h3>{content}"
 
 
-def _loads_chart(answer: StaticAnswer) -> go.Figure:
+def _loads_chart(answer: StaticAnswer) -> dict[str, Any]:
     """The most loaded half-joints' load [%MVC] at the answer (none that carries nothing),
     the strength (100 %MVC) drawn; the hover gives torque, strength and endurance."""
     loaded = [g for g in answer.groups if g.load_pct_mvc > 0]
@@ -145,27 +143,29 @@ def _loads_chart(answer: StaticAnswer) -> go.Figure:
         for g in groups
     ]
     colours = ["#d62728" if g.over_strength else "#1f77b4" for g in groups]
-    figure = go.Figure(
-        go.Bar(
-            x=[round(g.load_pct_mvc, 2) for g in groups], y=[g.name for g in groups],
-            orientation="h", marker_color=colours, hovertext=hover, hoverinfo="text",
-        )
-    )  # fmt: skip
+    bars = {
+        "type": "bar", "x": [round(g.load_pct_mvc, 2) for g in groups],
+        "y": [g.name for g in groups], "orientation": "h", "marker": {"color": colours},
+        "hovertext": hover, "hoverinfo": "text",
+    }  # fmt: skip
     heading = (
         f"the {len(groups)} most loaded muscle groups"
         if groups
         else "no muscle group carries a load"
     )
-    figure.add_vline(x=100, line={"dash": "dash", "color": "#d62728", "width": 1})
+    strength = {
+        "type": "line", "line": {"dash": "dash", "color": "#d62728", "width": 1},
+        "x0": 100, "x1": 100, "xref": "x", "y0": 0, "y1": 1, "yref": "y domain",
+    }  # fmt: skip
     top = max([100.0, *(g.load_pct_mvc for g in groups)])
-    figure.update_layout(
-        template="plotly_white", height=60 + 26 * len(groups), font={"size": 11},
-        margin={"l": 10, "r": 10, "t": 30, "b": 40},
-        title={"text": heading, "font": {"size": 12}},
-        xaxis={"title": {"text": "load (%MVC; 100 = strength)"}, "range": [0, 1.05 * top]},
-        yaxis={"automargin": True},
-    )  # fmt: skip
-    return figure
+    layout = {
+        "template": template("plotly_white"), "height": 60 + 26 * len(groups),
+        "font": {"size": 11}, "margin": {"l": 10, "r": 10, "t": 30, "b": 40},
+        "title": {"text": heading, "font": {"size": 12}},
+        "xaxis": {"title": {"text": "load (%MVC; 100 = strength)"}, "range": [0, 1.05 * top]},
+        "yaxis": {"automargin": True}, "shapes": [strength],
+    }  # fmt: skip
+    return {"data": [bars], "layout": layout}
 
 
 def _view(case: Case) -> dict[str, Any]:
@@ -176,9 +176,9 @@ def _view(case: Case) -> dict[str, Any]:
     scene = Scene(case.problem, case.problem.task_objects(), q, steps.tolist())
     figure, moves = body_figure(scene, steps)
     return {
-        "figure": json.loads(figure.to_json()),
+        "figure": figure,
         "labels": [label for label, _ in case.postures],
-        "chart": None if case.chart is None else json.loads(case.chart.to_json()),
+        "chart": case.chart,
         **moves,
     }
 
@@ -203,14 +203,14 @@ def page_html(heading: str, subtitle: str, cases: Sequence[Case], index: str = "
     views = [_view(case) for case in cases]
     return PAGE.format(
         title=html.escape(heading),
-        subtitle=html.escape(f"{subtitle} · plotly {plotly.__version__}"),
+        subtitle=html.escape(f"{subtitle} · plotly {version()}"),
         index=index,
         summaries="".join(_case_html(k, case) for k, case in enumerate(cases)),
         tables="".join(
             f"<div class='case' data-case='{k}'>{case.tables}</div>" for k, case in enumerate(cases)
         ),
         plotly=plotly_gzip(),
-        cases=inline(json.dumps(views, separators=(",", ":"))),
+        cases=script_json(views),
         script=scripts("viewer.js", "sortable.js", "posture_page.js"),
     )
 

@@ -166,15 +166,16 @@ class Scene:
         )
         self.polygons = {s: support_polygon(problem.body, q[s]) for s in steps}
         points = np.concatenate([self.skeleton.points[s].T for s in steps])
-        solids = [p.reshape(-1, 3) for s in steps for p in self.skeleton.solids(s)]
         self.floor = bool(points[:, 2].min() > -FLOOR_TOLERANCE)
         self.arrow = 0.12 * float(np.ptp(points, axis=0).max())
-        reach = [points, *solids, self.skeleton.com[steps]]
+        reach = [points, self.skeleton.com[steps]]
         reach += [np.c_[p, np.zeros(len(p))] for p in self.polygons.values() if p is not None]
         for at, force, _ in self.loads:
             reach += [self.skeleton.landmark(at, s) + self.arrow * _unit(force) for s in steps]
-        body = np.vstack(reach)
-        centre, span = body.mean(axis=0), np.ptp(body, axis=0)
+        lo, hi, total, count = self.skeleton.solids_extent(steps)
+        body = np.vstack([*reach, *([lo, hi] if count else [])])
+        centre = (np.vstack(reach).sum(axis=0) + total) / (sum(map(len, reach)) + count)
+        span = np.ptp(body, axis=0)
         near = [
             s.point[None]
             for s in self.shapes

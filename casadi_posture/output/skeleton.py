@@ -109,6 +109,22 @@ class Skeleton:
             for f, zero in zip(self._frame, self._zero, strict=True)
         ]
 
+    def solids_extent(self, steps: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """The mannequin's parts at all of ``steps`` summed up without placing each point:
+        the least and the greatest world coordinates [m] of their points, the points' sum
+        [m] and how many there are (inf, -inf, 0, 0 for a body without parts)."""
+        placed = self._placed[steps]
+        lo, hi, total, count = np.full(3, np.inf), np.full(3, -np.inf), np.zeros(3), 0
+        for f, zero in zip(self._frame, self._zero, strict=True):
+            points = zero.reshape(-1, 3)
+            origin, rotation = placed[:, f, :, 0], placed[:, f, :, 1:]
+            turned = rotation @ points.T  # steps × 3 × points
+            lo = np.minimum(lo, (origin + turned.min(axis=2)).min(axis=0))
+            hi = np.maximum(hi, (origin + turned.max(axis=2)).max(axis=0))
+            total += len(points) * origin.sum(axis=0) + rotation.sum(axis=0) @ points.sum(axis=0)
+            count += len(points) * len(steps)
+        return lo, hi, total, count
+
     def landmark(self, name: str, step: int) -> np.ndarray:
         """World position [m] of a landmark among the points at ``step``."""
         return self.points[step][:, self.keys.index(("landmark", name))]
