@@ -269,3 +269,22 @@ def test_no_report_writes_no_page_for_a_grid_nor_its_cases(tmp_path: Path) -> No
     assert again.exit_code == 0, again.output
     assert (out / "report.html").exists()
     assert (out / "cases" / "holding_m45" / "report.html").exists()
+
+
+def test_plotly_js_is_compressed_once_into_the_user_s_cache(tmp_path, monkeypatch) -> None:
+    """The page's plotly.js inflates to the installed package's; it is kept in the cache
+    folder and read back from it; an unwritable cache still gives the page its copy."""
+    import base64
+    import gzip
+
+    from casadi_posture.output import html_page
+    from casadi_posture.output.plotly_json import plotly_js
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    made = html_page.plotly_gzip.__wrapped__()
+    assert gzip.decompress(base64.b64decode(made)).decode() == plotly_js()
+    (kept,) = (tmp_path / "cache" / "casadi_posture").iterdir()
+    assert kept.read_text() == made and html_page.plotly_gzip.__wrapped__() == made
+    (tmp_path / "file").write_text("")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "file"))  # a file: no folder in it
+    assert html_page.plotly_gzip.__wrapped__() == made
