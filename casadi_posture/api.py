@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import shutil
 import tomllib
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -36,18 +37,17 @@ from casadi_posture.motion.scaling import body_lengths, lengths_note, measured_l
 from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
-from casadi_posture.output.html_report import write_report
 from casadi_posture.output.plain import dumps, plain
-from casadi_posture.output.plots import figure_formats, plot_simulation, plot_torque_curve
+from casadi_posture.output.plots import figure_formats, plot_torque_curve
 from casadi_posture.output.posture_page import write_solve_page
 from casadi_posture.output.results import (
     event_columns,
     summary,
     timeline_columns,
-    write_results,
     write_table,
 )
 from casadi_posture.output.rows import simulation_row
+from casadi_posture.output.run_files import write_run
 from casadi_posture.problem import (
     Problem,
     load_problem,
@@ -184,16 +184,23 @@ class Simulation:
         return frame(event_columns(self.result))
 
     def write(
-        self, out: str | Path, *, figures: bool = True, report: bool = True, force: bool = False
+        self,
+        out: str | Path,
+        *,
+        figures: bool = True,
+        report: bool = True,
+        force: bool = False,
+        workers: int = 1,
     ) -> list[Path]:
         """Write the run's files (and figures, and report.html: the run in a browser) into
-        ``out``: a new or empty folder, or any folder with ``force``."""
+        ``out``: a new or empty folder, or any folder with ``force``; ``workers`` > 1
+        writes them side by side in that many processes forked from this one."""
         out = Path(out)
         check_out(out, force=force, key="out")
-        written = write_results(self.result, out)
-        written += plot_simulation(self.result, out) if figures else []
-        page = write_report(self.result, out / "report.html") if report else None
-        return written + ([page] if page else [])
+        written = write_run(self.result, out, figures=figures, report=report, workers=workers)
+        if written.report_missing is not None:
+            warnings.warn(f"report.html not written: {written.report_missing}", stacklevel=2)
+        return written.paths
 
     def animate(self, path: str | Path, *, force: bool = False) -> Path | None:
         """Animate the run into ``path``: .gif (always) or .mp4 (with ffmpeg on the PATH); a

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import textwrap
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -424,29 +426,37 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
-    """All figures of a simulation into ``out`` (none for a run stopped before its first
-    step): postures.png in the plane of motion for a planar body, in four views for a 3-D
-    one; fatigue_regions.png for a body of more than one region; schedule.png for a run
-    with a work–rest schedule; scores.png (RULA and REBA) for a body they fit;
-    low_back.png (compression and shear at L5/S1) for a body with a lumbar joint."""
+def simulation_figures(result: SimulationResult, out: Path) -> list[Callable[[], Path]]:
+    """Each figure of a simulation into ``out``, to be drawn (none for a run stopped before
+    its first step): postures.png in the plane of motion for a planar body, in four views
+    for a 3-D one; fatigue_regions.png for a body of more than one region; schedule.png
+    for a run with a work–rest schedule; scores.png (RULA and REBA) for a body they fit;
+    low_back.png (compression and shear at L5/S1) for a body with a lumbar joint. Each
+    draws on its own, in any order or process."""
     if result.timeline.time.size == 0:
         return []
     body = result.problem.body
     draw_postures = plot_postures if body.planar else plot_postures_3d
     figures = [
-        plot_fatigue(result, out / "fatigue.png"),
-        plot_effector(result, out / "effector.png"),
-        plot_active_torque(result, out / "active_torque.png"),
-        draw_postures(result, out / "postures.png"),
+        (plot_fatigue, "fatigue.png"),
+        (plot_effector, "effector.png"),
+        (plot_active_torque, "active_torque.png"),
+        (draw_postures, "postures.png"),
     ]
     if len(_regions(result)) > 1:
-        figures.append(plot_fatigue_regions(result, out / "fatigue_regions.png"))
+        figures.append((plot_fatigue_regions, "fatigue_regions.png"))
     if result.schedule is not None:
-        figures.append(plot_schedule(result, out / "schedule.png"))
+        figures.append((plot_schedule, "schedule.png"))
     if body_kind(body) is not None:
-        figures.append(plot_scores(result, out / "scores.png"))
+        figures.append((plot_scores, "scores.png"))
+    drawn = [functools.partial(draw, result, out / name) for draw, name in figures]
     back = step_low_back(result)
     if back is not None:
-        figures.append(plot_low_back(result, back, out / "low_back.png"))
-    return figures
+        drawn.append(functools.partial(plot_low_back, result, back, out / "low_back.png"))
+    return drawn
+
+
+def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
+    """All figures of a simulation into ``out`` (``simulation_figures``), one after the
+    other."""
+    return [draw() for draw in simulation_figures(result, out)]

@@ -218,10 +218,8 @@ def one_line(text: str) -> str:
 def _simulate(problem: Problem, case: Case) -> tuple[dict[str, Any], dict[str, bytes]]:
     """A simulated case's row and files (with ``report``, its report.html too: an extra,
     left out if it cannot be written; without ``files``, none)."""
-    from casadi_posture.output.html_report import write_report
-    from casadi_posture.output.plots import plot_simulation
-    from casadi_posture.output.results import write_results
     from casadi_posture.output.rows import simulation_row
+    from casadi_posture.output.run_files import write_run
     from casadi_posture.simulation import simulate
 
     result = simulate(problem, case.solver)
@@ -230,13 +228,7 @@ def _simulate(problem: Problem, case: Case) -> tuple[dict[str, Any], dict[str, b
     if not case.files:
         return simulation_row(result), {}
     with tempfile.TemporaryDirectory() as folder:
-        written = write_results(result, Path(folder)) + plot_simulation(result, Path(folder))
-        if case.report:
-            try:
-                page = write_report(result, Path(folder) / "report.html")
-            except Exception:  # the page is an extra: never lose a case over it
-                page = None
-            written += [page] if page else []
+        written = write_run(result, Path(folder), report=case.report).paths  # the page: an extra
         files = {p.name: p.read_bytes() for p in written}
     return simulation_row(result), files
 
