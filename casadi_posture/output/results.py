@@ -389,13 +389,12 @@ def write_results(
     paths = [out / "timeline.csv"]
     write_table(columns, paths[0])
     try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+        from casadi_posture.output.arrow_columns import write_parquet
     except ImportError:  # no Parquet: none left from an earlier run beside the new CSV
         (out / "timeline.parquet").unlink(missing_ok=True)
     else:
         paths.append(out / "timeline.parquet")
-        pq.write_table(pa.table({k: list(v) for k, v in columns.items()}), str(paths[-1]))
+        write_parquet(columns, paths[-1])
     paths += [out / name for name in ("events.csv", "summary.json", "manifest.json")]
     write_table(event_columns(result), paths[-3])
     paths[-2].write_text(dumps(summary(result)) + "\n")

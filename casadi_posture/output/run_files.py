@@ -10,6 +10,7 @@ after the other."""
 from __future__ import annotations
 
 import functools
+import gc
 import itertools
 import multiprocessing
 import os
@@ -112,6 +113,7 @@ def side_by_side(jobs: Sequence[Callable[[], T]], workers: int) -> list[T]:
         return [job() for job in jobs]
     global _JOBS
     _JOBS = jobs
+    gc.freeze()  # the workers' garbage collector leaves what they inherit alone
     context = multiprocessing.get_context("fork")
     pool = ProcessPoolExecutor(workers, context, initializer=interrupt.ignore_in_worker)
     try:
@@ -126,4 +128,5 @@ def side_by_side(jobs: Sequence[Callable[[], T]], workers: int) -> list[T]:
         return [values[k] for k in range(len(jobs))]
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+        gc.unfreeze()
         _JOBS = ()
