@@ -499,17 +499,29 @@ def _build(problem: Problem, tasks: list[Task], keep_levels: int | None) -> _Bui
     problem's ``Shape`` (its body's numbers symbols)."""
     shape = Shape.of(problem.body, problem.strength)
     pair = (shape.symbols, shape.values(problem.body, problem.strength))
-    hierarchy = TaskHierarchy(shape.body, _shaped(tasks, shape), pair)
     torque_model = TorqueModel(shape.body, problem.loads, problem.passive, shape.strength, pair)
+    hierarchy = TaskHierarchy(shape.body, _shaped(tasks, shape, problem, torque_model), pair)
     whole_body = None
     if keep_levels is not None and _effort_comfort(problem) is not None:
         whole_body = WholeBodyAdjustment(torque_model, hierarchy, k=0.0, keep_levels=keep_levels)
     return _Built(hierarchy, torque_model, whole_body)
 
 
-def _shaped(tasks: list[Task], shape: Shape) -> list[Task]:
-    """``tasks`` with each comfort level's strengths those of ``shape`` (its values symbols)."""
-    return [replace(t, strength=shape.strength) if isinstance(t, Comfort) else t for t in tasks]
+def _shaped(tasks: list[Task], shape: Shape, problem: Problem, torques: TorqueModel) -> list[Task]:
+    """``tasks`` with each comfort level's strengths those of ``shape`` (its values symbols)
+    and, when it counts the problem's loads and passive torques, the active torque of the
+    torque model ``torques`` (not built again)."""
+    active = (torques.tau_act, torques.load_symbols)
+    return [
+        replace(
+            t,
+            strength=shape.strength,
+            active=active if (t.loads, t.passive) == (torques.loads, problem.passive) else None,
+        )
+        if isinstance(t, Comfort)
+        else t
+        for t in tasks
+    ]
 
 
 def _structure(problem: Problem, tasks: list[Task]) -> str:

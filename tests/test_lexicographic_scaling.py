@@ -218,3 +218,58 @@ def test_a_level_sqp_settles_builds_no_ipopt() -> None:
     assert set(solver.methods) == {"sqp"}
     assert all(solver._level(k).ipopt is None for k in range(hierarchy.depth + 1))
     np.testing.assert_allclose(near.q, answer.q, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "path",
+    [PROBLEMS.parent / "benchmarks/problems/humanoid_14.toml", PROBLEMS / "holding_m45.toml"],
+)
+def test_the_derivatives_given_to_sqp_are_those_of_its_nlp(path) -> None:
+    """Each level's SQP reads its objective's gradient and its constraints' Jacobian from
+    the hierarchy's Jacobians and the kept rows' curvature from once-differentiated
+    functions: against CasADi's own derivatives of the level's NLP at random postures
+    and multipliers, the kept rows' S_j random. The humanoid's level 1 has a
+    structurally sparse gradient (8 of 14 entries), which sqpmethod would misread."""
+    problem = load_problem(path)
+    h = TaskHierarchy(problem.body, problem.task_objects())
+    solver = LexicographicSolver(h)
+    rng = np.random.default_rng(3)
+    for k in range(h.depth + 1):
+        level = solver._level(k)
+        nlp, given = level.nlp, level.sqp.function
+        x, p, g = nlp["x"], nlp["p"], nlp["g"]
+        sigma, lam = ca.SX.sym("sigma"), ca.SX.sym("lam", g.numel())
+        gauss_newton = (
+            2 * h.jacobians[k].T @ h.jacobians[k]
+            + lexicographic.REGULARISATION * ca.SX.eye(x.numel())
+            if k < h.depth
+            else 2 * ca.SX.eye(x.numel())
+        )
+        own = ca.Function(
+            "own",
+            [x, p, sigma, lam],
+            [
+                ca.gradient(nlp["f"], x),
+                ca.jacobian(g, x),
+                sigma * gauss_newton + ca.hessian(ca.dot(lam, g), x)[0],
+            ],
+        )
+        assert given.get_function("nlp_jac_fg").sparsity_out("grad_f_x").is_dense()
+        for _ in range(3):
+            q = rng.uniform(problem.body.lower, problem.body.upper)
+            kept = [
+                np.concatenate([rng.normal(size=(m, m)).ravel("F"), rng.normal(size=m) * 0.01])
+                for m in h.sizes[:k]
+            ]
+            values = np.concatenate([h.targets, q, rng.normal(size=q.size), [1.0], *kept])
+            multipliers, weight = rng.normal(size=g.numel()), rng.uniform(0.5, 2.0)
+            gradient, jacobian, hessian = (
+                np.asarray(v) for v in own(q, values, weight, multipliers)
+            )
+            _, given_gradient, _, given_jacobian = given.get_function("nlp_jac_fg")(q, values)
+            given_hessian = given.get_function("nlp_hess_l")(q, values, weight, multipliers)
+            np.testing.assert_allclose(
+                np.asarray(given_gradient).ravel(), gradient.ravel(), atol=1e-10
+            )
+            np.testing.assert_allclose(np.asarray(given_jacobian), jacobian, atol=1e-10)
+            np.testing.assert_allclose(np.asarray(given_hessian), hessian, atol=1e-9)

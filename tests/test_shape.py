@@ -15,6 +15,7 @@ from casadi_posture.adjustment.whole_body import WholeBodyAdjustment
 from casadi_posture.biomech.shape import Shape, numbers, rebuilt
 from casadi_posture.biomech.torques import TorqueModel
 from casadi_posture.ik.hierarchy import TaskHierarchy
+from casadi_posture.ik.tasks import Comfort
 from casadi_posture.problem import load_problem
 from casadi_posture.simulation import simulate
 
@@ -58,11 +59,11 @@ def test_what_is_built_for_one_person_serves_another() -> None:
     shape = Shape.of(a.body, a.strength)
     values_b = shape.values(b.body, b.strength)
     assert not np.allclose(values_b, shape.values(a.body, a.strength))
-    tasks = simulation._shaped(a.task_objects(), shape)
-    template = TaskHierarchy(shape.body, tasks, (shape.symbols, shape.values(a.body, a.strength)))
-    torques_a = TorqueModel(
-        shape.body, a.loads, a.passive, shape.strength, (shape.symbols, template.shape_values())
-    )
+    pair = (shape.symbols, shape.values(a.body, a.strength))
+    torques_a = TorqueModel(shape.body, a.loads, a.passive, shape.strength, pair)
+    tasks = simulation._shaped(a.task_objects(), shape, a, torques_a)
+    assert [t.active is not None for t in tasks if isinstance(t, Comfort)] == [True]  # shared
+    template = TaskHierarchy(shape.body, tasks, pair)
     hierarchy = template.rebound(b.task_objects(), values_b)
     torques = torques_a.rebound(values_b)
     fresh = TaskHierarchy(b.body, b.task_objects())

@@ -86,7 +86,7 @@ class TorqueModel:
             body, self.loads, own, passive, strength
         )
         p = ca.vertcat(own, symbols)
-        self.p = p
+        self.p, self.load_symbols = p, own
         self.function = ca.Function(
             "torques",
             [q, p],

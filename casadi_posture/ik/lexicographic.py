@@ -105,6 +105,18 @@ class LexicographicOptions:
     rank_tolerance: float = 1e-9
 
 
+@dataclass(frozen=True)
+class _Derivatives:
+    """A level's objective gradient and Gauss-Newton Hessian, the Jacobian of its
+    constraints (the inequality's row, then each higher level's kept rows) and the
+    symbols S_j of those rows."""
+
+    gradient: ca.SX
+    jacobian: ca.SX
+    hessian: ca.SX
+    kept_rows: list[ca.SX]
+
+
 @dataclass
 class _Level:
     """One level's NLP (CasADi's dict), its SQP solver (None: the options leave too few
@@ -132,8 +144,9 @@ class LexicographicSolver:
         self.options = options or LexicographicOptions()
         body = hierarchy.body
         self._built: list[_Level | None] = [None] * (hierarchy.depth + 1)
+        self._curvatures: list[ca.Function | None] = [None] * hierarchy.depth
         f = hierarchy.function
-        dense = [ca.densify(v) for v in f(body.q, hierarchy.p)]
+        dense = [ca.densify(v) for v in hierarchy.residuals + hierarchy.jacobians]
         self._values = Compiled(
             ca.Function("levels", [body.q, hierarchy.p], dense, f.name_in(), f.name_out())
         )
@@ -159,10 +172,10 @@ class LexicographicSolver:
         ``rebind`` makes)."""
         built = self._built[k]
         if built is None:
-            nlp, hessian = self._problem(k)
+            nlp, derivatives = self._problem(k)
             sqp = None
             if self.options.max_iterations >= SQP_MAX_ITERATIONS:
-                sqp = Compiled(self._sqp(k, nlp, hessian))
+                sqp = Compiled(self._sqp(k, nlp, derivatives))
             built = self._built[k] = _Level(nlp, sqp)
         return built
 
@@ -174,24 +187,38 @@ class LexicographicSolver:
             level.ipopt = Compiled(self._ipopt(k, level.nlp))
         return level.ipopt
 
-    def _problem(self, k: int) -> tuple[dict, ca.SX]:
-        """The NLP of level k+1 (k = depth: the final ‖q - q_prev‖² level) and the
-        Gauss-Newton Hessian of its objective."""
+    def _problem(self, k: int) -> tuple[dict, _Derivatives]:
+        """The NLP of level k+1 (k = depth: the final ‖q - q_prev‖² level) and its
+        derivatives from the hierarchy's Jacobians (nothing differentiated again)."""
         h, body = self.hierarchy, self.hierarchy.body
         n, q = body.n, body.q
         q_prev, a, b = ca.SX.sym("q_prev", n), ca.SX.sym("a", n), ca.SX.sym("b")
-        params, g = [h.p, q_prev, a, b], [ca.dot(a, q)]
+        params, g, jacobian, kept_rows = [h.p, q_prev, a, b], [ca.dot(a, q)], [a.T], []
         for j in range(k):
             m = h.sizes[j]
             rows, kept = ca.SX.sym(f"S{j + 1}", m, m), ca.SX.sym(f"e{j + 1}_star", m)
             params += [ca.vec(rows), kept]
             g.append(rows @ (h.residuals[j] - kept))
+            jacobian.append(rows @ h.jacobians[j])
+            kept_rows.append(rows)
         if k < h.depth:
-            f = ca.sumsqr(h.residuals[k])
-            hessian = 2 * h.jacobians[k].T @ h.jacobians[k] + REGULARISATION * ca.SX.eye(n)
+            e, J = h.residuals[k], h.jacobians[k]
+            f, gradient = ca.sumsqr(e), 2 * J.T @ e
+            hessian = 2 * J.T @ J + REGULARISATION * ca.SX.eye(n)
         else:
-            f, hessian = ca.sumsqr(q - q_prev), 2 * ca.SX.eye(n)
-        return {"x": q, "p": ca.vertcat(*params), "f": f, "g": ca.vertcat(*g)}, hessian
+            f, gradient, hessian = ca.sumsqr(q - q_prev), 2 * (q - q_prev), 2 * ca.SX.eye(n)
+        nlp = {"x": q, "p": ca.vertcat(*params), "f": f, "g": ca.vertcat(*g)}
+        return nlp, _Derivatives(gradient, ca.vertcat(*jacobian), hessian, kept_rows)
+
+    def _curvature(self, j: int) -> ca.Function:
+        """∇²(μᵀ e_{j+1}(q)) as a function of q, the targets and μ: the curvature of level
+        j+1's kept rows, differentiated once and shared by every lower level's SQP."""
+        if self._curvatures[j] is None:
+            h, q = self.hierarchy, self.hierarchy.body.q
+            mu = ca.SX.sym("mu", h.sizes[j])
+            curvature, _ = ca.hessian(ca.dot(mu, h.residuals[j]), q)
+            self._curvatures[j] = ca.Function(f"curvature{j + 1}", [q, h.p, mu], [curvature])
+        return self._curvatures[j]
 
     def _ipopt(self, k: int, nlp: dict) -> ca.Function:
         """IPOPT on level k+1, exact Hessian."""
@@ -217,19 +244,33 @@ class LexicographicSolver:
             },
         )
 
-    def _sqp(self, k: int, nlp: dict, hessian: ca.SX) -> ca.Function:
-        """CasADi's SQP method on level k+1: the objective's Gauss-Newton ``hessian`` plus
-        the exact curvature of the constraints, full steps (no line search: it is used
-        near the solution only, and there its Armijo test failed on steps of 1e-16 rad,
-        which stalled the multipliers)."""
+    def _sqp(self, k: int, nlp: dict, derivatives: _Derivatives) -> ca.Function:
+        """CasADi's SQP method on level k+1: the objective's Gauss-Newton Hessian plus the
+        exact curvature of the kept rows (λ of rows S_j(e_j - e_j*) weighs ∇²e_j by
+        S_jᵀλ), full steps (no line search: it is used near the solution only, and there
+        its Armijo test failed on steps of 1e-16 rad, which stalled the multipliers). The
+        gradient (dense, as sqpmethod reads it) and the constraints' Jacobian are given, not
+        differentiated again."""
+        h, x, p = self.hierarchy, nlp["x"], nlp["p"]
         sigma, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", nlp["g"].numel())
-        curvature, _ = ca.hessian(ca.dot(lam_g, nlp["g"]), nlp["x"])
+        hessian, start = sigma * derivatives.hessian, 1  # row 0, aᵀq, is linear
+        for j, rows in enumerate(derivatives.kept_rows):
+            m = h.sizes[j]
+            hessian += self._curvature(j)(x, h.p, rows.T @ lam_g[start : start + m])
+            start += m
         hess_lag = ca.Function(
             f"level{k + 1}_hess_lag",
-            [nlp["x"], nlp["p"], sigma, lam_g],
-            [sigma * hessian + curvature],
+            [x, p, sigma, lam_g],
+            [hessian],
             ["x", "p", "lam_f", "lam_g"],
             ["hess_gamma_x_x"],
+        )
+        jac_fg = ca.Function(
+            f"level{k + 1}_jac_fg",
+            [x, p],
+            [nlp["f"], ca.densify(derivatives.gradient), nlp["g"], derivatives.jacobian],
+            ["x", "p"],
+            ["f", "grad_f_x", "g", "jac_g_x"],
         )
         qrqp = {
             "print_iter": False,
@@ -248,6 +289,7 @@ class LexicographicSolver:
                 "error_on_fail": False,
                 "calc_lam_p": False,
                 "hess_lag": hess_lag,
+                "jac_fg": jac_fg,
                 "qpsol": "qrqp",
                 "qpsol_options": qrqp,
                 "print_header": False,

@@ -261,6 +261,10 @@ class Comfort(Task):
     loads: tuple[Load, ...] = ()
     passive: Mapping[str, PassiveTorque] = field(default_factory=dict)
     strength: Mapping[str, Strength] = field(default_factory=dict)
+    #: The active torque per DOF [N·m] of these loads and passive torques as an expression of
+    #: ``body.q`` and a symbol for the loads (``pack``): a torque model's, taken with the
+    #: level's own load parameters in place of the symbol instead of built again.
+    active: tuple[ca.SX, ca.SX] | None = field(default=None, repr=False, compare=False)
 
     step_limit = ANGULAR_STEP
     unit = "1"
@@ -276,7 +280,13 @@ class Comfort(Task):
         if not self.measure.effort:
             return self.measure.rows(body, body.q, p)
         loads = p[n : n + LOAD_PARAMETERS * len(self.loads)]
-        _, _, active, _ = torque_expressions(body, self.loads, loads, self.passive, self.strength)
+        if self.active is None:
+            _, _, active, _ = torque_expressions(
+                body, self.loads, loads, self.passive, self.strength
+            )
+        else:
+            expression, symbol = self.active
+            active = ca.substitute(expression, symbol, loads)
         strength = comfort_strengths(body, self.strength)
         weights = p[n + LOAD_PARAMETERS * len(self.loads) :]
         return self.measure.rows(body, body.q, p[:n], active, strength, weights)
