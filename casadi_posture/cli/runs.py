@@ -81,9 +81,9 @@ from casadi_posture.static import law
     "--jobs",
     type=click.IntRange(min=1),
     default=default_workers(),
-    help="Processes that write the files and draw the figures side by side (1: one after "
-    f"the other in this one) [default: the cores, at most {MOST_WORKERS}; {default_workers()} "
-    "here].",
+    help="Processes that write the files and draw the figures side by side, on Linux (1: "
+    f"one after the other in this one) [default: the cores, at most {MOST_WORKERS}; "
+    f"{default_workers()} here].",
 )
 @ALL_OPTION
 @SET_OPTION

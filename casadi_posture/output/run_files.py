@@ -4,8 +4,9 @@ summary.json, manifest.json), the figures and report.html.
 None of them reads another, so with ``workers`` > 1 they are written side by side by
 worker processes forked from this one, which share the run in memory and need not import
 anything again. A 20-minute hold of the 29-DOF body has about 2 s of drawing and writing:
-about 1 s on two cores. Where processes cannot be forked (Windows) they are written one
-after the other."""
+about 1 s on two cores. Only on Linux: elsewhere forking a process that has loaded
+numpy's BLAS and matplotlib is not safe (macOS) or not possible (Windows), and they are
+written one after the other."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ import gc
 import itertools
 import multiprocessing
 import os
+import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
@@ -48,7 +50,7 @@ def cores() -> int:
     """The cores this process may run on."""
     try:
         return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
+    except AttributeError:  # not on Linux: no affinity to ask
         return os.cpu_count() or 1
 
 
@@ -70,7 +72,8 @@ def write_run(
     into ``out``, by ``workers`` processes side by side (1: in this one); ``command`` is
     recorded in the manifest."""
     out.mkdir(parents=True, exist_ok=True)
-    step_scores(result), step_low_back(result)  # measured once, shared by the forked workers
+    step_scores(result)  # measured once here, shared by the forked workers
+    step_low_back(result)
     tables = functools.partial(write_results, result, out, command=command)
     jobs: list[Callable[[], list[Path] | str]] = [tables]
     if figures:
@@ -109,7 +112,7 @@ def side_by_side(jobs: Sequence[Callable[[], T]], workers: int) -> list[T]:
     being run finish (no half-written file) and drops the others, which are handed to a
     worker only when one is free."""
     workers = min(workers, len(jobs))
-    if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+    if workers <= 1 or not sys.platform.startswith("linux"):
         return [job() for job in jobs]
     global _JOBS
     _JOBS = jobs
