@@ -454,9 +454,3 @@ def simulation_figures(result: SimulationResult, out: Path) -> list[Callable[[],
     if back is not None:
         drawn.append(functools.partial(plot_low_back, result, back, out / "low_back.png"))
     return drawn
-
-
-def plot_simulation(result: SimulationResult, out: Path) -> list[Path]:
-    """All figures of a simulation into ``out`` (``simulation_figures``), one after the
-    other."""
-    return [draw() for draw in simulation_figures(result, out)]
