@@ -87,18 +87,14 @@ class TorqueModel:
         )
         p = ca.vertcat(own, symbols)
         self.p, self.load_symbols = p, own
-        self.function = ca.Function(
-            "torques",
-            [q, p],
-            [self.tau_ext, self.tau_pas, self.tau_act, self.strength, ca.jacobian(self.tau_ext, q)],
-            ["q", "loads"],
-            ["tau_ext", "tau_pas", "tau_act", "strength", "dtau_ext"],
-        )
+        outputs = [self.tau_ext, self.tau_pas, self.tau_act, self.strength]
+        outputs.append(ca.jacobian(self.tau_ext, q))
+        names = ["tau_ext", "tau_pas", "tau_act", "strength", "dtau_ext"]
+        self.function = ca.Function("torques", [q, p], outputs, ["q", "loads"], names)
         self.default_loads = np.concatenate([pack(self.loads), numbers])
         self._own = own.numel()
-        dense = [ca.densify(v) for v in self.function(q, p)]
+        dense = [ca.densify(v) for v in outputs]  # the expressions, not a call of function
         self._last: tuple[tuple[bytes, bytes], Torques] | None = None
-        names = self.function.name_out()
         self._compiled = Compiled(
             ca.Function("torques_dense", [q, p], dense[:4], ["q", "loads"], names[:4])
         )
