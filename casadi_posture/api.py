@@ -3,7 +3,9 @@ run what-if grids and batches. The command line is a thin layer over these funct
 
 Every result is a small named type whose data turns into a pandas DataFrame in one call
 (``to_frame()``; pandas is an optional extra), with the columns and units of the files:
-degrees, N·m, %MVC, s.
+degrees, N·m, %MVC, s. The modules that draw (matplotlib, a third of a second to import)
+are imported where a figure or page is drawn, so that a command that draws nothing, or
+draws in other processes, never loads them (``casadi_posture.output``).
 
     >>> import casadi_posture as cp
     >>> problem = cp.load("problems/holding_m45.toml", {"loads[0].mass_kg": 5.0})
@@ -34,12 +36,10 @@ from casadi_posture.motion.marker_ik import read_c3d_recording
 from casadi_posture.motion.markers import read_c3d
 from casadi_posture.motion.recording import Recording, between, held_frames, repeat, resample
 from casadi_posture.motion.scaling import body_lengths, lengths_note, measured_lengths
-from casadi_posture.output.animation import check_format, write_animation
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.axes import axis_keys, axis_label
+from casadi_posture.output.movie_formats import check_format
 from casadi_posture.output.plain import dumps, plain
-from casadi_posture.output.plots import figure_formats, plot_torque_curve
-from casadi_posture.output.posture_page import write_solve_page
 from casadi_posture.output.results import (
     event_columns,
     summary,
@@ -57,7 +57,6 @@ from casadi_posture.problem import (
 )
 from casadi_posture.runs import compare as comparison
 from casadi_posture.runs.batch import BatchReport, cases_from_paths, clear_run, run_batch
-from casadi_posture.runs.compare_report import write_compare_page
 from casadi_posture.runs.grid_report import PAGE, write_grid_report
 from casadi_posture.runs.population import (
     MAX_WORKERS,
@@ -66,7 +65,6 @@ from casadi_posture.runs.population import (
     run_population,
 )
 from casadi_posture.runs.whatif import MAX_CASES, WHATIF_OUTPUTS, describe_grid, grid
-from casadi_posture.runs.whatif_plots import plot_outcomes
 from casadi_posture.simulation import SimulationResult, replay
 from casadi_posture.simulation import simulate as run_simulation
 from casadi_posture.static import StaticAnswer, at_posture
@@ -128,6 +126,8 @@ def plot_curve(
 ) -> Path:
     """Draw a ``curve`` as the paper's Fig. 3 into ``path`` (.png, .pdf, .svg, ...):
     a new file, or any with ``force``."""
+    from casadi_posture.output.plots import plot_torque_curve  # imported when drawn
+
     path = Path(path)
     check_figure(path, force=force, key="path")
     return plot_torque_curve(result, path, title or f"torques over {result.dof}")
@@ -135,6 +135,8 @@ def plot_curve(
 
 def check_figure(path: Path, *, force: bool, key: str, source: str | Path | None = None) -> None:
     """A figure's path: a format matplotlib writes, and the rule of every output."""
+    from casadi_posture.output.plots import figure_formats  # imported when drawn
+
     formats = figure_formats()
     if path.suffix.lstrip(".").lower() not in formats:
         expected = f"a figure file ending in one of {', '.join('.' + f for f in sorted(formats))}"
@@ -208,6 +210,8 @@ class Simulation:
         path = Path(path)
         check_format(path.suffix.lstrip(".").lower(), key="path")
         check_out(path, force=force, key="path")
+        from casadi_posture.output.animation import write_animation  # imported when drawn
+
         return write_animation(self.result, path)
 
 
@@ -335,7 +339,11 @@ def write_solve(
     out.mkdir(parents=True, exist_ok=True)
     path = out / "solve.json"
     path.write_text(dumps(answer_json(answer, str(answer.problem.path))) + "\n", encoding="utf-8")
-    return [path] + ([write_solve_page(answer, out / "report.html")] if report else [])
+    if not report:
+        return [path]
+    from casadi_posture.output.posture_page import write_solve_page  # imported when drawn
+
+    return [path, write_solve_page(answer, out / "report.html")]
 
 
 def compare(problem: Problem) -> comparison.Comparison:
@@ -362,6 +370,8 @@ def write_compare(
     write_table(columns, out / "compare.csv")
     written = [out / "compare.csv"]
     if report and compared:
+        from casadi_posture.runs.compare_report import write_compare_page  # imported when drawn
+
         written.append(write_compare_page(compared, out / "report.html"))
     return written
 
@@ -419,6 +429,8 @@ def whatif(
     )
     shutil.copyfile(answer.summary, out / "whatif.csv")
     if figures:
+        from casadi_posture.runs.whatif_plots import plot_outcomes  # imported when drawn
+
         data = load_problem(path, given).data
         labels = {axis: axis_label(data, axis) for axis, _ in varies}
         drawn = plot_outcomes(answer.rows, varies, labels, out, simulate=not static, paired=paired)

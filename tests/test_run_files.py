@@ -1,8 +1,11 @@
-"""A run's files written side by side by processes forked from this one: the same bytes as
-one after the other, a job's error raised here, Ctrl-C leaving no file half written."""
+"""A run's files written side by side by processes forked from this one, after the run or
+(``Writers``) before it: the same bytes as one after the other, a job's error raised here,
+Ctrl-C leaving no file half written; the modules a command loads before its run draw
+nothing."""
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import signal
 import subprocess
@@ -14,7 +17,7 @@ import pytest
 from conftest import PROBLEMS
 
 from casadi_posture import api
-from casadi_posture.output.run_files import side_by_side, write_run
+from casadi_posture.output.run_files import Writers, side_by_side, write_run
 
 #: The 3-D standing hold for 300 s: the constraint takes over at 244 s, so every figure
 #: of a 3-D body is drawn (scores, low back, regions) with something in it.
@@ -37,6 +40,64 @@ def test_side_by_side_writes_the_same_files_as_one_after_the_other(standing, tmp
     for a, b in zip(one.paths, two.paths, strict=True):
         if a.name != "manifest.json":  # it records when it was written
             assert a.read_bytes() == b.read_bytes(), a.name
+
+
+def test_writers_forked_before_the_run_write_the_same_files(standing, tmp_path) -> None:
+    """The process forked with the problem receives the run without it and writes the same
+    bytes; a run of another problem is written here instead."""
+    one = write_run(standing.result, tmp_path / "one", command=["x"], workers=1)
+    with Writers(2, standing.result.problem) as writers:
+        assert writers.serve(standing.result) and writers.workers == 2
+        two = write_run(standing.result, tmp_path / "two", command=["x"], writers=writers)
+        other = api.load(PROBLEMS / "holding_m45.toml", {"simulation.duration_s": 5.0})
+        assert not writers.serve(api.simulate(other).result)
+    assert [p.name for p in one.paths] == [p.name for p in two.paths]
+    for a, b in zip(one.paths, two.paths, strict=True):
+        if a.name != "manifest.json":
+            assert a.read_bytes() == b.read_bytes(), a.name
+    assert Writers(1, standing.result.problem).workers == 1  # nothing forked: written here
+
+
+def test_the_commands_modules_load_no_drawing_module_before_the_run(tmp_path) -> None:
+    """What lets ``Writers`` import matplotlib while the run goes on; and the library
+    never chooses a backend for the user's own plots (it draws on Figure objects)."""
+    script = (
+        "import sys\n"
+        "import casadi_posture as cp, casadi_posture.cli\n"
+        "print(sorted(m for m in ('matplotlib', 'pyarrow', 'pandas') if m in sys.modules))\n"
+        "import matplotlib\n"
+        "matplotlib.use('svg')\n"
+        f"problem = cp.load({str(PROBLEMS / 'holding_m45.toml')!r})\n"
+        "cp.plot_curve(cp.curve(problem, problem.body.dof_names[0]), sys.argv[1])\n"
+        "print(matplotlib.get_backend())\n"
+    )
+    shown = subprocess.run(
+        [sys.executable, "-c", script, str(tmp_path / "curve.png")],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split("\n")
+    assert shown[:2] == ["[]", "svg"]
+
+
+def test_once_stop_is_set_no_further_job_is_handed_out(tmp_path) -> None:
+    """``Writers``' second Ctrl-C: the process writing the files hears it through ``stop``;
+    the jobs being run finish, the others are dropped."""
+    stop = multiprocessing.get_context("fork").Event()
+
+    def job(k: int):
+        def write() -> int:
+            if k == 1:
+                stop.set()
+            time.sleep(0.3)
+            (tmp_path / f"file{k}").write_text("whole")
+            return k
+
+        return write
+
+    with pytest.raises(KeyboardInterrupt):
+        side_by_side([job(k) for k in range(5)], 2, stop)
+    assert {p.name for p in tmp_path.iterdir()} == {"file0", "file1"}
 
 
 def test_a_job_s_error_is_raised_here(tmp_path) -> None:

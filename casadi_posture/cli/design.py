@@ -12,12 +12,6 @@ import numpy as np
 from casadi_posture import api
 from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.cli.common import FORCE_OPTION, SET_OPTION, emit_json, main, problem_from
-from casadi_posture.output.design_plots import (
-    SWEEP_POINTS,
-    plot_compression,
-    plot_loads,
-    plot_sweep,
-)
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import fmt, table
 from casadi_posture.workplace_design.answer import Design, sweep
@@ -120,14 +114,16 @@ def design_command(
 def _write(answer: Design, out: Path) -> list[Path]:
     """design.json and the figure: the one-key sweep, or the group loads (the compression
     for that objective)."""
+    from casadi_posture.output import design_plots as plots  # imported when drawn
+
     out.mkdir(parents=True, exist_ok=True)
     data = out / "design.json"
     figure = out / "design.png"
     if len(answer.free) == 1:
         f = answer.free[0]
-        values = np.linspace(f.lower_m, f.upper_m, SWEEP_POINTS)
+        values = np.linspace(f.lower_m, f.upper_m, plots.SWEEP_POINTS)
         points = sweep(answer, values)
-        plot_sweep(answer, points, figure)
+        plots.plot_sweep(answer, points, figure)
         record = answer.to_dict() | {
             "sweep": [
                 {"value_m": p.value_m, "task_kept": p.kept, **p.score.to_dict(answer.unit)}
@@ -135,7 +131,8 @@ def _write(answer: Design, out: Path) -> list[Path]:
             ]
         }
     else:
-        (plot_compression if answer.objective == "compression" else plot_loads)(answer, figure)
+        draw = plots.plot_compression if answer.objective == "compression" else plots.plot_loads
+        draw(answer, figure)
         record = answer.to_dict()
     data.write_text(dumps(record) + "\n", encoding="utf-8")
     return [data, figure]

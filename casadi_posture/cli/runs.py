@@ -29,12 +29,12 @@ from casadi_posture.cli.common import (
     shown_groups,
 )
 from casadi_posture.errors import MISSING, ProblemError
-from casadi_posture.output.animation import WRITERS, check_format
 from casadi_posture.output.low_back import run_lines as low_back_lines
+from casadi_posture.output.movie_formats import WRITERS, check_format
 from casadi_posture.output.outcome import outcome_lines, time_text
 from casadi_posture.output.report import table
 from casadi_posture.output.results import SHOWN_RECOVERIES
-from casadi_posture.output.run_files import MOST_WORKERS, default_workers
+from casadi_posture.output.run_files import MOST_WORKERS, Writers, default_workers
 from casadi_posture.output.run_files import write_run as files_of_run
 from casadi_posture.output.scores import run_lines
 from casadi_posture.runs.whatif import MAX_CASES
@@ -138,10 +138,18 @@ def simulate(
             "out", "simulate", f"{Path(problem).stem}-{resolved.spec.fatigue.strategy}-{name}"
         )
         api.check_out(out, force=force)
-        run = api.simulate(resolved, solver)
-        files = write_run(
-            run, out, command_line(), report=not no_report, figures=not no_figures, workers=jobs
-        )
+        draws = not (no_figures and no_report)
+        with Writers(_workers(jobs), resolved, draws=draws) as writers:
+            run = api.simulate(resolved, solver)
+            files = write_run(
+                run,
+                out,
+                command_line(),
+                report=not no_report,
+                figures=not no_figures,
+                workers=writers.workers,
+                writers=writers,
+            )
         if animate is not None:
             drawn = run.animate(out / f"animation.{animate}", force=True)
             files += [drawn] if drawn else []
@@ -178,15 +186,16 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
             key = f"problem_data.{error.key}"
             raise ProblemError(path, key, error.value, error.expected) from None
         recording = record.get("recording")
-        if recording is None:
-            run = api.simulate(resolved, record["solver"])
-        else:
-            options = ("solver", "between_s", "resample_s", "repeat_times", "until_s")
-            read_with = {k: recording.get(k) for k in options}
-            if read_with["between_s"] is not None:
-                read_with["between_s"] = tuple(read_with["between_s"])
-            run = api.evaluate(resolved, _recording(path, recording), **read_with)
-        files = write_run(run, out, command_line())
+        with Writers(_workers(None), resolved) as writers:
+            if recording is None:
+                run = api.simulate(resolved, record["solver"])
+            else:
+                options = ("solver", "between_s", "resample_s", "repeat_times", "until_s")
+                read_with = {k: recording.get(k) for k in options}
+                if read_with["between_s"] is not None:
+                    read_with["between_s"] = tuple(read_with["between_s"])
+                run = api.evaluate(resolved, _recording(path, recording), **read_with)
+            files = write_run(run, out, command_line(), writers=writers)
     report = _report if recording is None else report_recording
     code = report(run, files, law(resolved))
     original = path.parent / "summary.json"
@@ -238,17 +247,29 @@ def write_run(
     report: bool = True,
     figures: bool = True,
     workers: int | None = None,
+    writers: Writers | None = None,
 ) -> list[Path]:
     """The run's files, (with ``figures``) its figures and (with ``report``) report.html,
-    written side by side by ``workers`` processes (default: the cores, at most 4); a
-    report that cannot be written is said on stderr and the run's other files are kept."""
-    workers = default_workers() if workers is None else workers
+    written side by side by the ``writers`` forked before the run, else by ``workers``
+    processes forked now (default: the cores, at most 4); a report that cannot be written
+    is said on stderr and the run's other files are kept."""
     written = files_of_run(
-        run.result, out, command=command, figures=figures, report=report, workers=workers
+        run.result,
+        out,
+        command=command,
+        figures=figures,
+        report=report,
+        workers=_workers(workers),
+        writers=writers,
     )
     if written.report_missing is not None:
         click.echo(f"report.html: not written ({written.report_missing})", err=True)
     return written.paths
+
+
+def _workers(given: int | None) -> int:
+    """The processes that write a run's files: ``given``, else the cores, at most 4."""
+    return default_workers() if given is None else given
 
 
 def _report(

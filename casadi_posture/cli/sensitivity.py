@@ -19,7 +19,6 @@ from casadi_posture.cli.common import (
 )
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.report import table
-from casadi_posture.output.tornado import plot_tornado
 from casadi_posture.sensitivity_analysis.analysis import Sensitivity, sensitivity
 from casadi_posture.sensitivity_analysis.parametric import KINDS
 
@@ -197,5 +196,7 @@ def _write(result: Sensitivity, out: Path, top: int, kinds: tuple[str, ...]) -> 
         writer.writerows(rows)
     files = [data, ranked]
     if rows:
+        from casadi_posture.output.tornado import plot_tornado  # imported when drawn
+
         files.append(plot_tornado(rows, _title(result), figure, top))
     return files

@@ -12,19 +12,18 @@ import os
 import textwrap
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib import animation
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from casadi_posture import interrupt
-from casadi_posture.errors import ProblemError
 from casadi_posture.output.key_postures import title
+from casadi_posture.output.movie_formats import WRITERS, check_format
 from casadi_posture.output.scene import VIEWS, Pose, Scene, add_3d_view
 from casadi_posture.output.time_axis import in_unit, time_unit
 from casadi_posture.simulation import SimulationResult
-
-#: Animation formats and the matplotlib writer of each.
-WRITERS = {"gif": "pillow", "mp4": "ffmpeg"}
 
 #: Frames per second, and the most frames drawn (a longer run is subsampled evenly):
 #: at most 12 s of animation whatever the run's length.
@@ -37,16 +36,6 @@ ZOOM_3D, LEGEND_WIDTH = 1.12, 26
 #: The body's colour while no group owns the constraint, and while one does.
 FREE, CONSTRAINED = "black", "tab:orange"
 _COLOURS = ((FREE, "off"), (CONSTRAINED, "on"))
-
-
-def check_format(name: str, key: str = "--animate") -> str:
-    """An animation format this machine can write (gif always; mp4 needs ffmpeg)."""
-    if name not in WRITERS:
-        raise ProblemError(None, key, name, f"one of {', '.join(WRITERS)}")
-    if not animation.writers.is_available(WRITERS[name]):
-        expected = "gif (mp4 needs an ffmpeg program on the PATH, and none was found)"
-        raise ProblemError(None, key, name, expected)
-    return name
 
 
 def frame_steps(steps: int, most: int = MAX_FRAMES) -> list[int]:
@@ -70,7 +59,7 @@ ANIMATION_TITLE_WIDTH = 130
 STRIP_TOP = 1.5
 
 
-def _fatigue_strip(ax: plt.Axes, result: SimulationResult) -> plt.Line2D:
+def _fatigue_strip(ax: Axes, result: SimulationResult) -> Line2D:
     """Fatigue [0–1] over time [min] of the groups that owned the constraint (or of the
     most tired one), both thresholds, the constraint shaded; returns the time cursor."""
     tl, s = result.timeline, result.settings
@@ -133,7 +122,7 @@ class _Frames:
     def __init__(self, result: SimulationResult, steps: list[int]) -> None:
         self.result = result
         scene = Scene.of_run(result, steps)
-        self.fig = fig = plt.figure(figsize=(9.0, 6.0), dpi=100)
+        self.fig = fig = Figure(figsize=(9.0, 6.0), dpi=100)
         grid = fig.add_gridspec(
             2, 3, height_ratios=[4.5, 1.1], width_ratios=[1.5, 0.9, 0.9], left=0.05, right=0.99,
             top=0.87, bottom=0.08, hspace=0.3, wspace=0.4,
@@ -202,5 +191,4 @@ def write_animation(result: SimulationResult, path: Path) -> Path | None:
         os.replace(temporary, path)
         return path
     finally:
-        plt.close(frames.fig)
         temporary.unlink(missing_ok=True)

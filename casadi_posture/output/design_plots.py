@@ -8,8 +8,9 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from casadi_posture.biomech.low_back import limits as compression_limits
 from casadi_posture.output.axes import axis_label, with_unit
@@ -31,7 +32,7 @@ def _label(design: Design) -> str:
     return f"share of {design.objective.removeprefix('capable-')}s capable (%)"
 
 
-def _niosh(ax: plt.Axes, highest: float) -> float:
+def _niosh(ax: Axes, highest: float) -> float:
     """The NIOSH design limit [N] as a dashed line, and the upper limit when the ``highest``
     compression shown [N] is above the design limit; returns the top that shows them [N]."""
     limit = compression_limits()
@@ -55,7 +56,8 @@ def plot_sweep(design: Design, points: Sequence[SweepPoint], path: Path) -> Path
     marks = [design.start.value, design.best.value, design.check.value]
     highest = max([*y[finite], *(v for v in marks if math.isfinite(v)), 1e-9])
     top = highest * 1.15
-    fig, ax = plt.subplots(figsize=(7.0, 4.5), dpi=120)
+    fig = Figure(figsize=(7.0, 4.5), dpi=120)
+    ax = fig.subplots()
     good = kept & finite
     ax.plot(x[good], y[good], "o-", color="tab:blue", lw=1.5, ms=4, label="IK re-solved")
     if (kept & ~finite).any():
@@ -117,7 +119,8 @@ def plot_loads(design: Design, path: Path) -> Path:
     order = np.argsort(-np.maximum(start, best))[:SHOWN_GROUPS]
     order = [k for k in order if max(start[k], best[k]) > 0] or list(order[:1])
     position = np.arange(len(order))
-    fig, ax = plt.subplots(figsize=(8.0, 4.5), dpi=120)
+    fig = Figure(figsize=(8.0, 4.5), dpi=120)
+    ax = fig.subplots()
     ax.bar(position - 0.2, start[order], 0.4, color="0.55", label="start (IK)")
     ax.bar(position + 0.2, best[order], 0.4, color="tab:red", label="best (NLP)")
     threshold = design.problem.fatigue.settings().get("load_threshold_pct_mvc")
@@ -138,7 +141,8 @@ def plot_compression(design: Design, path: Path) -> Path:
     the IK re-solved there, with the NIOSH limits."""
     names = ["start (IK)", "best (NLP)", "best, IK re-solved"]
     values = [design.start.value, design.best.value, design.check.value]
-    fig, ax = plt.subplots(figsize=(6.0, 4.5), dpi=120)
+    fig = Figure(figsize=(6.0, 4.5), dpi=120)
+    ax = fig.subplots()
     bars = ax.bar(names, values, 0.5, color=["0.55", "tab:red", "tab:orange"])
     ax.bar_label(bars, fmt="%.0f N", fontsize=8)
     top = max(max(values) * 1.15, _niosh(ax, max(values)))

@@ -6,7 +6,6 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.artist import Artist
 from matplotlib.figure import Figure
@@ -74,7 +73,7 @@ def postures_3d_figure(result: SimulationResult) -> Figure:
     rows = sum(handle.get_label().count("\n") + 1 for handle in handles)
     low = max(dy, (rows + 1) * ENTRY_IN / scale)  # the bottom row, legend beside [m]
     size = (scale * (dx + dy + wide) + 1.2, scale * (dz + low) + 1.0)
-    fig = plt.figure(figsize=size, dpi=120)
+    fig = Figure(figsize=size, dpi=120)
     grid = fig.add_gridspec(2, 3, width_ratios=[dx, dy, wide], height_ratios=[dz, low])
     fig.subplots_adjust(left=0.07, right=0.99, bottom=0.06, top=0.92, wspace=0.35, hspace=0.3)
     cells = {"sagittal": grid[0, 0], "frontal": grid[0, 1], "top": grid[1, 0]}

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import textwrap
 
-import matplotlib
 import numpy as np
 
 from casadi_posture.output.time_axis import time_unit
@@ -59,7 +58,9 @@ def key_postures(result: SimulationResult) -> list[Shown]:
     steps = recoveries(result)
     shown: list[Shown] = [(0, "initial", "black")]
     drawn = steps[:DRAWN_RECOVERIES]
-    colours = matplotlib.colormaps["viridis"](np.linspace(0.15, 0.85, max(len(drawn), 1)))
+    from matplotlib import colormaps  # imported when drawn (casadi_posture.output)
+
+    colours = colormaps["viridis"](np.linspace(0.15, 0.85, max(len(drawn), 1)))
     for step, colour in zip(drawn, colours, strict=False):
         shown.append((step, f"recovery at {when(step)}", colour))
     if len(steps) > DRAWN_RECOVERIES:

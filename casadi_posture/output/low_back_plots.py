@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from casadi_posture.biomech.low_back import MODEL, limits
 from casadi_posture.output.key_postures import recoveries, title
@@ -27,9 +27,8 @@ def plot_low_back(result: SimulationResult, steps: StepLoads, path: Path) -> Pat
     rest (nothing held, not computed) leaves a gap."""
     times, unit = in_unit(result.timeline.time)
     limit = limits()
-    fig, (top, bottom) = plt.subplots(
-        2, 1, figsize=(9.5, 6.5), dpi=120, sharex=True, height_ratios=(2, 1)
-    )
+    fig = Figure(figsize=(9.5, 6.5), dpi=120)
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
     high = (1 + HEADROOM) * max(limit["upper"], float(np.nanmax(steps.compression)))
     edges = (0.0, limit["design"], limit["upper"], high)
     for low, up, colour in zip(edges[:-1], edges[1:], ZONE_COLOURS, strict=True):

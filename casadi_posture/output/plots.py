@@ -9,8 +9,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
@@ -40,7 +41,8 @@ def figure_formats() -> list[str]:
 def plot_torque_curve(curve: TorqueCurve, path: Path, title: str) -> Path:
     """The paper's Fig. 3: passive, external, active and minus-active torque over the range."""
     deg = np.degrees(curve.angles)
-    fig, ax = plt.subplots(figsize=(7.0, 4.5), dpi=120)
+    fig = Figure(figsize=(7.0, 4.5), dpi=120)
+    ax = fig.subplots()
     ax.axhline(0.0, color="0.6", lw=0.8)
     ax.plot(deg, curve.passive, color="tab:blue", lw=2, label="passive τp")
     ax.plot(deg, curve.external, color="black", lw=1.5, label="external τe")
@@ -77,7 +79,8 @@ def plot_fatigue(result: SimulationResult, path: Path) -> Path:
     drawn = [k for k in range(len(halves)) if peak[k] >= DRAWN_MIN_FATIGUE]
     drawn = drawn or [k for k in range(len(halves)) if peak[k] > 0]
     many = len(drawn) > INSIDE_LEGEND
-    fig, ax = plt.subplots(figsize=(9.5 if many else 7.0, 4.0), dpi=120)
+    fig = Figure(figsize=(9.5 if many else 7.0, 4.0), dpi=120)
+    ax = fig.subplots()
     colours = matplotlib.colormaps["tab10"].colors
     groups = list(dict.fromkeys(data_name(halves[k].name) for k in drawn))
     same = []
@@ -146,7 +149,7 @@ def _regions(result: SimulationResult) -> dict[str, list[int]]:
     return regions
 
 
-def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
+def fatigue_regions_figure(result: SimulationResult) -> Figure:
     """Fatigue over time (min, or s for a run of 5 min or less), one panel (labelled with its
     region) per body region that has a group above 1 % fatigue (at least the most tired
     region's), the region that
@@ -166,9 +169,8 @@ def fatigue_regions_figure(result: SimulationResult) -> plt.Figure:
         tired = {top: regions[top]}
     order = sorted(tired, key=lambda r: (first[tired[r]].min(), -peak[tired[r]].max()))
     height = 1.2 + 1.8 * len(order)  # [in]
-    fig, axes = plt.subplots(
-        len(order), 1, sharex=True, squeeze=False, figsize=(9.0, height), dpi=120
-    )
+    fig = Figure(figsize=(9.0, height), dpi=120)
+    axes = fig.subplots(len(order), 1, sharex=True, squeeze=False)
     for ax, region in zip(axes[:, 0], order, strict=True):
         groups = [k for k in tired[region] if peak[k] > REGION_MIN_FATIGUE]
         groups = groups or [max(tired[region], key=lambda k: peak[k])]
@@ -226,7 +228,7 @@ def plot_fatigue_regions(result: SimulationResult, path: Path) -> Path:
     return save_figure(fatigue_regions_figure(result), path, tight=False)
 
 
-def _draw_tasks(ax: plt.Axes, result: SimulationResult, skeleton: Skeleton) -> None:
+def _draw_tasks(ax: Axes, result: SimulationResult, skeleton: Skeleton) -> None:
     """Lines, planes (their trace in the plane of motion) and target points of the tasks."""
     i, j = skeleton.plane
     ax.autoscale(False)
@@ -251,7 +253,7 @@ def _draw_tasks(ax: plt.Axes, result: SimulationResult, skeleton: Skeleton) -> N
             )
 
 
-def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
+def _mark_cycles(ax: Axes, result: SimulationResult) -> None:
     """Shade the intervals the fatigue constraint was on; mark each recovery."""
     tl = result.timeline
     scale, _ = time_unit(tl.time)
@@ -279,7 +281,7 @@ def _mark_cycles(ax: plt.Axes, result: SimulationResult) -> None:
         )
 
 
-def _at_least(ax: plt.Axes, span: float) -> None:
+def _at_least(ax: Axes, span: float) -> None:
     """Widen the y-axis about its middle to at least ``span``."""
     low, high = ax.get_ylim()
     if high - low < span:
@@ -295,7 +297,7 @@ DRAWN_ANGLES = 6
 STILL_DEG = 0.1
 
 
-def _say(ax: plt.Axes, text: str) -> None:
+def _say(ax: Axes, text: str) -> None:
     """Write ``text`` in the middle of ``ax``: what a degenerate plot does not show."""
     ax.text(
         0.5, 0.5, textwrap.fill(text, 48), transform=ax.transAxes, ha="center", va="center",
@@ -320,7 +322,8 @@ def plot_effector(result: SimulationResult, path: Path) -> Path:
     ordered = sorted(result.tasks, key=lambda t: t.priority)
     line = next((t for t in ordered if isinstance(t, Line)), None)
     top = next((t for t in ordered if isinstance(t, Position | Plane)), None)
-    fig, ax = plt.subplots(figsize=(7.0, 3.6), dpi=120)
+    fig = Figure(figsize=(7.0, 3.6), dpi=120)
+    ax = fig.subplots()
     times, unit = in_unit(tl.time)
     if line is not None and tl.along_line is not None:
         ax.plot(times, tl.along_line, color="tab:blue", lw=1.8)
@@ -367,7 +370,7 @@ def plot_active_torque(result: SimulationResult, path: Path) -> Path:
     steps = recoveries(result)
     goal = steps[0] if steps else tl.time.size - 1
     skeleton = Skeleton(body, tl.q)
-    fig = plt.figure(figsize=(9.0, 4.2), dpi=120)
+    fig = Figure(figsize=(9.0, 4.2), dpi=120)
     ax = fig.add_axes((0.08, 0.13, 0.55, 0.75))
     deg = np.degrees(tl.q[:, j])
     ax.axhline(0, color="0.6", lw=0.8)
@@ -413,7 +416,8 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
     posture (the first few, told apart by colour and time) and the last one; the tasks'
     lines, planes and targets drawn."""
     skeleton = Skeleton(result.problem.body, result.timeline.q)
-    fig, ax = plt.subplots(figsize=(6.0, 5.0), dpi=120)
+    fig = Figure(figsize=(6.0, 5.0), dpi=120)
+    ax = fig.subplots()
     for k, (step, label, colour) in enumerate(key_postures(result)):
         skeleton.draw(ax, step, color=colour, lw=2.6 if k == 0 else 1.6, label=label)
     skeleton.frame(ax)

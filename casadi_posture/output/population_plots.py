@@ -7,8 +7,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from casadi_posture.biomech.capability import PEOPLE, SEXES
 from casadi_posture.output.saving import save_figure
@@ -20,7 +21,7 @@ COLOURS = {"male": "tab:blue", "female": "tab:red"}
 
 def _figure(
     rows: Sequence[Mapping[str, Any]],
-) -> tuple[plt.Figure, plt.Axes, float, str, dict[str, list[Mapping[str, Any]]]]:
+) -> tuple[Figure, Axes, float, str, dict[str, list[Mapping[str, Any]]]]:
     """A figure and its axes, the time unit of the runs (``time_unit``: its divisor from s
     and its name) and the rows of the workers that ran, per sex (none: left out)."""
     ran = {
@@ -30,7 +31,8 @@ def _figure(
     ran = {sex: found for sex, found in ran.items() if found}
     ends = [float(r["simulated_s"]) for found in ran.values() for r in found]
     scale, unit = time_unit(np.array([0.0, max(ends, default=1.0)]))
-    fig, ax = plt.subplots(figsize=(7.0, 4.0), dpi=120)
+    fig = Figure(figsize=(7.0, 4.0), dpi=120)
+    ax = fig.subplots()
     return fig, ax, scale, unit, ran
 
 

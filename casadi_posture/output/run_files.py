@@ -1,12 +1,14 @@
 """A simulated run's files in its folder: the tables (timeline.csv and .parquet, events.csv,
 summary.json, manifest.json), the figures and report.html.
 
-None of them reads another, so with ``workers`` > 1 they are written side by side by
-worker processes forked from this one, which share the run in memory and need not import
-anything again. A 20-minute hold of the 29-DOF body has about 2 s of drawing and writing:
-about 1 s on two cores. Only on Linux: elsewhere forking a process that has loaded
-numpy's BLAS and matplotlib is not safe (macOS) or not possible (Windows), and they are
-written one after the other."""
+None of them reads another, so with more than one worker they are written side by side
+by processes forked from this one, on Linux only: elsewhere forking a process that has
+loaded numpy's BLAS and matplotlib is not safe (macOS) or not possible (Windows), and they
+are written one after the other. The workers are forked after the run: they share it in
+memory. A command forks, before its run, one process that imports matplotlib and the
+drawing modules while the run goes on (``Writers``); it receives the run, without its
+problem (it has it), and forks the workers. A 20-minute hold of the 29-DOF body has about
+2 s of drawing and writing: about 1 s on two cores."""
 
 from __future__ import annotations
 
@@ -15,19 +17,21 @@ import gc
 import itertools
 import multiprocessing
 import os
+import pickle
 import sys
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass, replace
+from multiprocessing.synchronize import Event as EventType
 from pathlib import Path
+from types import TracebackType
 from typing import TypeVar
 
 from casadi_posture import interrupt
-from casadi_posture.output.html_report import write_report
 from casadi_posture.output.low_back import step_low_back
-from casadi_posture.output.plots import simulation_figures
 from casadi_posture.output.results import write_results
 from casadi_posture.output.scores import step_scores
+from casadi_posture.problem import Problem
 from casadi_posture.simulation import SimulationResult
 
 T = TypeVar("T")
@@ -59,6 +63,10 @@ def default_workers() -> int:
     return min(cores(), MOST_WORKERS)
 
 
+def _forks() -> bool:
+    return sys.platform.startswith("linux")
+
+
 def write_run(
     result: SimulationResult,
     out: Path,
@@ -67,27 +75,45 @@ def write_run(
     figures: bool = True,
     report: bool = True,
     workers: int = 1,
+    writers: Writers | None = None,
 ) -> RunFiles:
     """The run's tables, (with ``figures``) its figures and (with ``report``) report.html
-    into ``out``, by ``workers`` processes side by side (1: in this one); ``command`` is
-    recorded in the manifest."""
+    into ``out``, by the ``writers`` forked before the run, else by ``workers`` processes
+    forked now (1: in this one); ``command`` is recorded in the manifest."""
     out.mkdir(parents=True, exist_ok=True)
-    step_scores(result)  # measured once here, shared by the forked workers
-    step_low_back(result)
-    tables = functools.partial(write_results, result, out, command=command)
-    jobs: list[Callable[[], list[Path] | str]] = [tables]
-    if figures:
-        jobs += [lambda draw=draw: [draw()] for draw in simulation_figures(result, out)]
-    if report:
-        jobs.append(lambda: _page(result, out / "report.html"))
-    done = side_by_side(jobs, workers)
+    if writers is not None and writers.serve(result):
+        done = writers.write(result, out, command=command, figures=figures, report=report)
+    else:
+        if workers > 1:  # measured once here, shared by the forked workers
+            step_scores(result)
+            step_low_back(result)
+        done = side_by_side(run_jobs(result, out, command, figures, report), workers)
     paths = [p for d in done if not isinstance(d, str) for p in d]
     missing = done[-1] if report and isinstance(done[-1], str) else None
     return RunFiles(paths, missing)
 
 
+def run_jobs(
+    result: SimulationResult, out: Path, command: list[str] | None, figures: bool, report: bool
+) -> list[Callable[[], list[Path] | str]]:
+    """Each file's job, in the order of ``RunFiles.paths``: the tables, each figure, the
+    page (its paths, or why the page was not written)."""
+    jobs: list[Callable[[], list[Path] | str]] = [
+        lambda: write_results(result, out, command=command)
+    ]
+    if figures:
+        from casadi_posture.output.plots import simulation_figures  # imported when drawn
+
+        jobs += [lambda draw=draw: [draw()] for draw in simulation_figures(result, out)]
+    if report:
+        jobs.append(lambda: _page(result, out / "report.html"))
+    return jobs
+
+
 def _page(result: SimulationResult, path: Path) -> list[Path] | str:
     """report.html, or why it was not written."""
+    from casadi_posture.output.html_report import write_report  # imported when drawn
+
     try:
         page = write_report(result, path)
     except KeyboardInterrupt:  # a second Ctrl-C while the page was written
@@ -97,39 +123,153 @@ def _page(result: SimulationResult, path: Path) -> list[Path] | str:
     return [page] if page is not None else "no step was run"
 
 
-#: The jobs the forked workers run, by index (set before they are forked: they inherit it).
-_JOBS: Sequence[Callable[[], object]] = ()
+class Writers:
+    """A process forked now, before a run of ``problem``, that will write its files with
+    ``workers`` processes it forks then (on Linux, more than one; else none, and the files
+    are written one after the other here). It ignores Ctrl-C (this process decides) and,
+    with ``draws``, imports the drawing modules while the run goes on. A context manager:
+    leaving it lets the files being written finish and ends the process."""
+
+    def __init__(self, workers: int, problem: Problem, *, draws: bool = True) -> None:
+        self.problem = problem
+        self.workers = workers if workers > 1 and _forks() else 1
+        self._pool: ProcessPoolExecutor | None = None
+        if self.workers > 1:
+            global _PROBLEM, _STOP
+            _PROBLEM, _STOP = problem, multiprocessing.get_context("fork").Event()
+            self._stop = _STOP
+            self._pool = _fork(1, functools.partial(_ready, draws))
+
+    def __enter__(self) -> Writers:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, tb: TracebackType
+    ) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """End the processes once the jobs they run are done."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def serve(self, result: SimulationResult) -> bool:
+        """Whether these processes can write ``result``'s files: a run of their problem."""
+        return self._pool is not None and result.problem is self.problem
+
+    def write(
+        self,
+        result: SimulationResult,
+        out: Path,
+        *,
+        command: list[str] | None,
+        figures: bool,
+        report: bool,
+    ) -> list[list[Path] | str]:
+        """``run_jobs``' values: the run goes to the process pickled, without its problem
+        (it was forked with it), and its workers run the jobs. A second Ctrl-C here lets
+        the jobs being run finish and drops the others."""
+        assert self._pool is not None and self.serve(result)
+        run = pickle.dumps(replace(result, problem=None), pickle.HIGHEST_PROTOCOL)
+        spec = (out, command, figures, report)
+        written = self._pool.submit(_write_received, run, spec, self.workers)
+        try:
+            return written.result()
+        except KeyboardInterrupt:
+            self._stop.set()  # no further job handed out
+            raise
 
 
-def _job(index: int) -> object:
-    return _JOBS[index]()
-
-
-def side_by_side(jobs: Sequence[Callable[[], T]], workers: int) -> list[T]:
-    """Each job's value, in order; run by ``workers`` processes forked from this one (they
-    ignore Ctrl-C, which the terminal sends them too: this process decides), or here one
-    after the other. A job's exception is raised here; a second Ctrl-C here lets the jobs
-    being run finish (no half-written file) and drops the others, which are handed to a
-    worker only when one is free."""
+def side_by_side(
+    jobs: Sequence[Callable[[], T]], workers: int, stop: EventType | None = None
+) -> list[T]:
+    """Each job's value, in order; run by ``workers`` processes forked from this one now
+    (they ignore Ctrl-C, which the terminal sends them too: this process decides), or here
+    one after the other. A job's exception is raised here; a second Ctrl-C here lets the
+    jobs being run finish (no half-written file) and drops the others, which are handed
+    to a worker only when one is free (as they are once ``stop`` is set)."""
     workers = min(workers, len(jobs))
-    if workers <= 1 or not sys.platform.startswith("linux"):
+    if workers <= 1 or not _forks():
         return [job() for job in jobs]
     global _JOBS
     _JOBS = jobs
-    gc.freeze()  # the workers' garbage collector leaves what they inherit alone
-    context = multiprocessing.get_context("fork")
-    pool = ProcessPoolExecutor(workers, context, initializer=interrupt.ignore_in_worker)
+    pool = _fork(workers, interrupt.ignore_in_worker)
     try:
-        waiting = iter(range(len(jobs)))
-        running = {pool.submit(_job, k): k for k in itertools.islice(waiting, workers)}
-        values: dict[int, T] = {}
-        while running:  # a job handed out when a worker is free: none queued to cancel
-            done, _ = wait(running, return_when=FIRST_COMPLETED)
-            for future in done:
-                values[running.pop(future)] = future.result()
-                running |= {pool.submit(_job, k): k for k in itertools.islice(waiting, 1)}
-        return [values[k] for k in range(len(jobs))]
+        return _hand_out(lambda k: pool.submit(_inherited_job, k), workers, stop)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
-        gc.unfreeze()
         _JOBS = ()
+
+
+def _fork(workers: int, initializer: Callable[[], None]) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes forked now; their garbage collector leaves what
+    they inherit alone."""
+    gc.freeze()
+    try:
+        pool = ProcessPoolExecutor(workers, multiprocessing.get_context("fork"), initializer)
+        pool.submit(os.getpid)  # a forking pool forks all its workers on its first job
+    finally:
+        gc.unfreeze()
+    return pool
+
+
+def _hand_out(
+    submit: Callable[[int], Future[tuple[int, T]]], workers: int, stop: EventType | None = None
+) -> list[T]:
+    """The jobs' values in order: job ``k`` handed to a worker (``submit``) when one is
+    free, ``workers`` at first, until a worker has said how many jobs there are; once
+    ``stop`` is set, none more (``KeyboardInterrupt`` when the jobs being run are done)."""
+    count: int | None = None
+    indices = itertools.count()
+    running = {submit(k): k for k in itertools.islice(indices, workers)}
+    values: dict[int, T] = {}
+    while running:
+        done, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in done:
+            k = running.pop(future)
+            count, value = future.result()
+            if k < count:
+                values[k] = value
+            following = next(indices)
+            if stop is not None and stop.is_set():
+                running.clear()
+                raise KeyboardInterrupt
+            if following < count:
+                running[submit(following)] = following
+    return [values[k] for k in range(count or 0)]
+
+
+#: What the processes forked now inherit: the jobs (``side_by_side``); the problem of the
+#: coming run and the request to stop handing out jobs (``Writers``).
+_JOBS: Sequence[Callable[[], object]] = ()
+_PROBLEM: Problem | None = None
+_STOP: EventType | None = None
+
+
+def _inherited_job(k: int) -> tuple[int, object]:
+    return len(_JOBS), _JOBS[k]() if k < len(_JOBS) else None
+
+
+def _write_received(run: bytes, spec: tuple, workers: int) -> list[list[Path] | str]:
+    """In the ``Writers`` process: the run's files, by ``workers`` processes it forks."""
+    result = replace(pickle.loads(run), problem=_PROBLEM)
+    if workers > 1:  # measured once here, shared by the forked workers
+        step_scores(result)
+        step_low_back(result)
+    return side_by_side(run_jobs(result, *spec), workers, _STOP)
+
+
+def _ready(draws: bool) -> None:
+    """The ``Writers`` process: Ctrl-C ignored; the Parquet writer and, with ``draws``,
+    the drawing modules imported (with the garbage collector off, then frozen, as the
+    command's entry point does)."""
+    interrupt.ignore_in_worker()
+    gc.disable()
+    import casadi_posture.output.arrow_columns
+
+    if draws:
+        import casadi_posture.output.html_report
+        import casadi_posture.output.plots  # noqa: F401
+    gc.freeze()
+    gc.enable()

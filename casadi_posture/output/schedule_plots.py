@@ -6,8 +6,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from casadi_posture.output.key_postures import title
 from casadi_posture.output.saving import save_figure
@@ -31,7 +32,7 @@ def rest_spans(result: SimulationResult) -> list[tuple[float, float]]:
     return [(tl.time[a] - dt, tl.time[b - 1]) for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
-def _fatigue_panel(ax: plt.Axes, result: SimulationResult, heading: str) -> str:
+def _fatigue_panel(ax: Axes, result: SimulationResult, heading: str) -> str:
     """The most tired groups' fatigue over time (``time_unit``'s unit, which it returns),
     both thresholds, rest periods shaded."""
     tl, s = result.timeline, result.settings
@@ -68,7 +69,8 @@ def _schedule_text(result: SimulationResult) -> str:
 
 def plot_schedule(result: SimulationResult, path: Path) -> Path:
     """Fatigue of the most tired groups over the run, the rest periods shaded (schedule.png)."""
-    fig, ax = plt.subplots(figsize=(9.0, 4.0), dpi=120)
+    fig = Figure(figsize=(9.0, 4.0), dpi=120)
+    ax = fig.subplots()
     unit = _fatigue_panel(ax, result, f"{title(result)} — {_schedule_text(result)}")
     ax.set_xlabel(f"time ({unit})")
     return save_figure(fig, path)
@@ -77,9 +79,8 @@ def plot_schedule(result: SimulationResult, path: Path) -> Path:
 def plot_runs(runs: Sequence[tuple[str, SimulationResult]], path: Path) -> Path:
     """One fatigue panel per labelled run (e.g. the two ends of a duty-cycle bracket), on a
     shared time axis, rest periods shaded."""
-    fig, axes = plt.subplots(
-        len(runs), 1, sharex=True, squeeze=False, figsize=(9.0, 1.0 + 2.6 * len(runs)), dpi=120
-    )
+    fig = Figure(figsize=(9.0, 1.0 + 2.6 * len(runs)), dpi=120)
+    axes = fig.subplots(len(runs), 1, sharex=True, squeeze=False)
     units = {
         _fatigue_panel(ax, result, f"{label}: {_schedule_text(result)}")
         for ax, (label, result) in zip(axes[:, 0], runs, strict=True)
@@ -100,7 +101,8 @@ def plot_duty_vs_rest(
     to the shortest hold found to reach the threshold; a hold sustainable to the horizon
     (continuous) drawn as an upward triangle at the horizon, no sustainable hold as a cross
     at 0."""
-    fig, ax = plt.subplots(figsize=(6.5, 4.2), dpi=120)
+    fig = Figure(figsize=(6.5, 4.2), dpi=120)
+    ax = fig.subplots()
     found = [(r, t) for r, t, f in zip(t_off_s, sustainable_s, failing_s, strict=True) if f and t]
     if found:
         ax.plot(*zip(*found, strict=True), color="tab:blue", lw=0.8, alpha=0.5)

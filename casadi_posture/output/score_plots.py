@@ -6,8 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from textwrap import fill
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from casadi_posture.ergonomics import reba, rula
 from casadi_posture.output.key_postures import recoveries, title
@@ -46,7 +46,8 @@ def plot_scores(result: SimulationResult, path: Path) -> Path:
     tl, steps = result.timeline, step_scores(result)
     times, unit = in_unit(tl.time)
     scored = next(s for s in steps if s)
-    fig, axes = plt.subplots(2, 1, figsize=(9.5, 6.5), dpi=120, sharex=True)
+    fig = Figure(figsize=(9.5, 6.5), dpi=120)
+    axes = fig.subplots(2, 1, sharex=True)
     sheets = (
         ("rula", "RULA grand score", lambda s: s.rula.grand),
         ("reba", "REBA score", lambda s: s.reba.reba),

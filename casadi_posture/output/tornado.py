@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
 
 from casadi_posture.output.saving import save_figure
 
@@ -18,7 +18,8 @@ def plot_tornado(rows: list[dict[str, object]], title: str, path: Path, top: int
     elasticity changes by ±10 % of its value (to first order: ±10 %·elasticity), largest at
     the top; ``rows`` as ``Sensitivity.ranked`` gives them."""
     shown = [r for r in rows if r["endurance_elasticity"] is not None][:top][::-1]
-    fig, ax = plt.subplots(figsize=(8.5, 0.38 * len(shown) + 1.8))
+    fig = Figure(figsize=(8.5, 0.38 * len(shown) + 1.8))
+    ax = fig.subplots()
     up = np.array([STEP_PCT * float(r["endurance_elasticity"]) for r in shown])
     y = np.arange(len(shown))
     ax.barh(y, up, color="tab:blue", label=f"input +{STEP_PCT:g} %")

@@ -42,7 +42,6 @@ from casadi_posture.output.results import (
     over_strength_at_start,
     write_table,
 )
-from casadi_posture.output.schedule_plots import plot_duty_vs_rest, plot_runs
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.simulation import SimulationResult, simulate, whole_steps
 from casadi_posture.static import tied
@@ -424,6 +423,11 @@ def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
     paths = [out / "duty_cycle.json", out / "duty_cycle.csv"]
     paths[0].write_text(dumps([c.summary() for c in cycles]) + "\n")
     write_table(table_columns(cycles), paths[1])
+    from casadi_posture.output.schedule_plots import (  # imported when drawn
+        plot_duty_vs_rest,
+        plot_runs,
+    )
+
     shown = next((c for c in cycles if c.verdict == "bracketed"), cycles[0] if cycles else None)
     if shown is not None and shown.runs:
         labelled = [

@@ -8,8 +8,9 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
 from casadi_posture.biomech.capability import DESIGN_LIMIT_PCT, PEOPLE, SEXES
 from casadi_posture.biomech.low_back import limits as back_limits
@@ -82,7 +83,8 @@ def plot_outcomes(
         series = SERIES.get(outcome, {outcome: ""})
         if not any(r.get(column) is not None for r in ran for column in series):
             continue
-        fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=110)
+        fig = Figure(figsize=(6.4, 4.2), dpi=110)
+        ax = fig.subplots()
         for (g, group), (s, (column, sex)) in itertools.product(
             enumerate(groups), enumerate(series.items())
         ):
@@ -124,7 +126,7 @@ def plot_outcomes(
 
 
 def _marks(
-    ax: plt.Axes, outcome: str, xs: np.ndarray, ys: np.ndarray, members: list, colour: str
+    ax: Axes, outcome: str, xs: np.ndarray, ys: np.ndarray, members: list, colour: str
 ) -> None:
     """A task held to the end of the run (a lower bound) as an upward triangle, a flagged
     case crossed out in red."""
@@ -137,7 +139,7 @@ def _marks(
         ax.plot(xs[flagged], ys[flagged], "x", ms=11, mew=2, color="tab:red")
 
 
-def _limits(ax: plt.Axes, outcome: str) -> None:
+def _limits(ax: Axes, outcome: str) -> None:
     """What an answer is judged against: its limits dotted (the share capable on 0-100 %,
     the compression from 0 to above the design limit), the action levels of a score shaded
     and named by their level."""
