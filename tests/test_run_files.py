@@ -169,3 +169,15 @@ def test_a_second_ctrl_c_stops_after_the_files_being_written(tmp_path) -> None:
     assert code != 0 and stdout == ""
     assert {"file0", "file1"} <= files and not {"started2", "file2", "file3"} & files
     assert all((tmp_path / f"file{k}").read_text() == "whole" for k in (0, 1))
+
+
+def test_a_run_stopped_before_its_first_step_is_said_and_exits_130(monkeypatch, capsys) -> None:
+    """Ctrl-C while the run was being built: no step, no table of loads to print."""
+    from casadi_posture import interrupt
+    from casadi_posture.cli.runs import _report
+
+    monkeypatch.setattr(interrupt, "requested", lambda: True)
+    run = api.simulate(api.load(PROBLEMS / "holding_m45.toml"))
+    assert run.result.timeline.time.size == 0 and run.stop == "interrupted"
+    assert _report(run, [], "law") == interrupt.EXIT_CODE
+    assert "no step was run (interrupted)" in capsys.readouterr().out

@@ -279,6 +279,10 @@ def _report(
     unless ``show_all``); their exit code."""
     result = run.result
     problem = str(result.problem.path)
+    if result.timeline.time.size == 0:  # stopped (Ctrl-C) before its first step
+        click.echo(f"{problem}: no step was run ({result.stop}); nothing to show")
+        click.echo("files: " + ", ".join(str(f) for f in files))
+        return INTERRUPTED if result.stop == "interrupted" or interrupt.requested() else 1
     report = run.summary()
     stats = report["solver_statistics"]
     click.echo(
