@@ -179,5 +179,5 @@ def test_a_run_stopped_before_its_first_step_is_said_and_exits_130(monkeypatch, 
     monkeypatch.setattr(interrupt, "requested", lambda: True)
     run = api.simulate(api.load(PROBLEMS / "holding_m45.toml"))
     assert run.result.timeline.time.size == 0 and run.stop == "interrupted"
-    assert _report(run, [], "law") == interrupt.EXIT_CODE
+    assert _report(run, "law") == interrupt.EXIT_CODE
     assert "no step was run (interrupted)" in capsys.readouterr().out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import time
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from casadi_posture.cli.common import (
     out_option,
     problem_from,
 )
-from casadi_posture.cli.runs import report_recording, write_run
+from casadi_posture.cli.runs import echo_files, report_recording, write_run
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
 from casadi_posture.runs.prediction import (
@@ -142,12 +143,13 @@ def evaluate(
         out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
         api.check_out(out, force=force)
         run = api.evaluate(resolved, recording)
-        files = write_run(run, out, command_line(), report=not no_report)
-        code = report_recording(run, files, law(resolved), show_all, read_s=read_s)
+        shown = functools.partial(report_recording, run, law(resolved), show_all, read_s=read_s)
+        files, code = write_run(run, out, command_line(), shown, report=not no_report)
+        code = echo_files(files, code)
         if compare and run.stop != "interrupted":
             comparison = compare_prediction(run.result.problem, run.result)
             predicted = api.Simulation(comparison.predicted)
-            extra = write_run(predicted, out / "predicted", command_line(), report=not no_report)
+            extra, _ = write_run(predicted, out / "predicted", command_line(), report=not no_report)
             extra += write_prediction(comparison, out)
             _echo_prediction(comparison, extra)
             code = code or (1 if comparison.predicted_summary["flags"] else 0)

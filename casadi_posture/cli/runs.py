@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -141,10 +143,11 @@ def simulate(
         draws = not (no_figures and no_report)
         with Writers(_workers(jobs), resolved, draws=draws) as writers:
             run = api.simulate(resolved, solver)
-            files = write_run(
+            files, code = write_run(
                 run,
                 out,
                 command_line(),
+                functools.partial(_report, run, law(resolved), show_all),
                 report=not no_report,
                 figures=not no_figures,
                 workers=writers.workers,
@@ -156,7 +159,7 @@ def simulate(
             if drawn is None:
                 why = "Ctrl-C" if interrupt.requested() else "no step was run"
                 click.echo(f"animation: not written ({why})", err=True)
-    raise SystemExit(_report(run, files, law(resolved), show_all))
+    raise SystemExit(echo_files(files, code))
 
 
 @main.command()
@@ -195,9 +198,10 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
                 if read_with["between_s"] is not None:
                     read_with["between_s"] = tuple(read_with["between_s"])
                 run = api.evaluate(resolved, _recording(path, recording), **read_with)
-            files = write_run(run, out, command_line(), writers=writers)
-    report = _report if recording is None else report_recording
-    code = report(run, files, law(resolved))
+            report = _report if recording is None else report_recording
+            shown = functools.partial(report, run, law(resolved))
+            files, code = write_run(run, out, command_line(), shown, writers=writers)
+    code = echo_files(files, code)
     original = path.parent / "summary.json"
     if not original.exists():
         click.echo(f"FLAGGED: no summary.json beside {path}: the rerun was not compared")
@@ -243,16 +247,19 @@ def write_run(
     run: api.Simulation,
     out: Path,
     command: list[str],
+    shown: Callable[[], int] | None = None,
     *,
     report: bool = True,
     figures: bool = True,
     workers: int | None = None,
     writers: Writers | None = None,
-) -> list[Path]:
+) -> tuple[list[Path], int]:
     """The run's files, (with ``figures``) its figures and (with ``report``) report.html,
     written side by side by the ``writers`` forked before the run, else by ``workers``
-    processes forked now (default: the cores, at most 4); a report that cannot be written
-    is said on stderr and the run's other files are kept."""
+    processes forked now (default: the cores, at most 4), while ``shown`` prints the run;
+    the files and the exit code ``shown`` gives (0 without it). A report that cannot be
+    written is said on stderr and the run's other files are kept."""
+    codes: list[int] = [] if shown is not None else [0]
     written = files_of_run(
         run.result,
         out,
@@ -261,10 +268,18 @@ def write_run(
         report=report,
         workers=_workers(workers),
         writers=writers,
+        meanwhile=None if shown is None else lambda: codes.append(shown()),
     )
     if written.report_missing is not None:
         click.echo(f"report.html: not written ({written.report_missing})", err=True)
-    return written.paths
+    return written.paths, codes[0]
+
+
+def echo_files(files: list[Path], code: int) -> int:
+    """Print the files written; the exit code: ``code``, or Ctrl-C's when it came while
+    they were written."""
+    click.echo("files: " + ", ".join(str(f) for f in files))
+    return INTERRUPTED if interrupt.requested() else code
 
 
 def _workers(given: int | None) -> int:
@@ -272,16 +287,13 @@ def _workers(given: int | None) -> int:
     return default_workers() if given is None else given
 
 
-def _report(
-    run: api.Simulation, files: list[Path], recovery_law: str, show_all: bool = False
-) -> int:
+def _report(run: api.Simulation, recovery_law: str, show_all: bool = False) -> int:
     """Print what simulate and rerun show (on a large body the most loaded half-joints,
-    unless ``show_all``); their exit code."""
+    unless ``show_all``) but the files; their exit code."""
     result = run.result
     problem = str(result.problem.path)
     if result.timeline.time.size == 0:  # stopped (Ctrl-C) before its first step
         click.echo(f"{problem}: no step was run ({result.stop}); nothing to show")
-        click.echo("files: " + ", ".join(str(f) for f in files))
         return INTERRUPTED if result.stop == "interrupted" or interrupt.requested() else 1
     report = run.summary()
     stats = report["solver_statistics"]
@@ -334,14 +346,12 @@ def _report(
             f"most {tired:.2f} fatigue; --all prints every row"
         )
     click.echo()
-    return echo_outcome(run, report, files, show_all)
+    return echo_outcome(run, report, show_all)
 
 
-def echo_outcome(
-    run: api.Simulation, report: dict[str, Any], files: list[Path], show_all: bool = False
-) -> int:
+def echo_outcome(run: api.Simulation, report: dict[str, Any], show_all: bool = False) -> int:
     """Print a run's outcome (its ``summary``: what tired and gave out, recoveries,
-    plausibility, RULA/REBA, the low back, the flags) and its files; its exit code."""
+    plausibility, RULA/REBA, the low back, the flags); its exit code."""
     result = run.result
     for line in outcome_lines(report):
         click.echo(line)
@@ -370,7 +380,6 @@ def echo_outcome(
         click.echo(line)
     for flag in report["flags"]:
         click.echo(f"FLAGGED: {flag}")
-    click.echo("files: " + ", ".join(str(f) for f in files))
     if result.stop == "interrupted" or interrupt.requested():
         return INTERRUPTED
     return 1 if report["flags"] else 0
@@ -378,7 +387,6 @@ def echo_outcome(
 
 def report_recording(
     run: api.Simulation,
-    files: list[Path],
     recovery_law: str,
     show_all: bool = False,
     *,
@@ -443,7 +451,7 @@ def report_recording(
             "--all prints every row"
         )
     click.echo()
-    return echo_outcome(run, report, files, show_all)
+    return echo_outcome(run, report, show_all)
 
 
 def _minutes(value: float | None, verdict: str | None) -> float | None:
