@@ -181,3 +181,61 @@ def test_a_run_stopped_before_its_first_step_is_said_and_exits_130(monkeypatch, 
     assert run.result.timeline.time.size == 0 and run.stop == "interrupted"
     assert _report(run, "law") == interrupt.EXIT_CODE
     assert "no step was run (interrupted)" in capsys.readouterr().out
+
+
+#: Writers whose jobs leave their process id and sleep; the process writing is killed once
+#: they have started: the command says so in one error, and no process is left behind.
+KILLED = """
+import os, sys, time
+from pathlib import Path
+from casadi_posture import api
+from casadi_posture.errors import CasadiPostureError
+from casadi_posture.output import run_files
+
+out = Path(sys.argv[1])
+
+def sleeping(result, folder, command, figures, report):
+    def job():
+        (out / f"worker{os.getpid()}").touch()
+        time.sleep(60)
+    return [job, job]
+
+run_files.run_jobs = sleeping
+problem = api.load(sys.argv[2], {"simulation.duration_s": 5.0})
+with run_files.Writers(2, problem) as writers:
+    (out / f"writer{next(iter(writers._pool._processes))}").touch()
+    run = api.simulate(problem)
+    try:
+        run_files.write_run(run.result, out / "files", writers=writers)
+    except CasadiPostureError as error:
+        print(error, flush=True)
+"""
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0]
+    except FileNotFoundError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="forks only on Linux")
+def test_a_killed_writing_process_is_an_error_and_leaves_no_process(tmp_path) -> None:
+    process = subprocess.Popen(
+        [sys.executable, "-c", KILLED, str(tmp_path), str(PROBLEMS / "holding_m45.toml")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while len(list(tmp_path.glob("worker*"))) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    workers = [int(p.name.removeprefix("worker")) for p in tmp_path.glob("worker*")]
+    (writer,) = [int(p.name.removeprefix("writer")) for p in tmp_path.glob("writer*")]
+    assert len(workers) == 2 and all(_running(pid) for pid in workers)
+    os.kill(writer, signal.SIGKILL)
+    stdout, _ = process.communicate(timeout=30)  # it used to wait for ever
+    assert "ended abruptly (killed, or out of memory)" in stdout
+    time.sleep(0.5)
+    assert not any(_running(pid) for pid in workers)  # they end with the writer

@@ -12,15 +12,18 @@ problem (it has it), and forks the workers. A 20-minute hold of the 29-DOF body 
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import gc
 import itertools
 import multiprocessing
 import os
 import pickle
+import signal
 import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
 from multiprocessing.synchronize import Event as EventType
 from pathlib import Path
@@ -28,6 +31,7 @@ from types import TracebackType
 from typing import TypeVar
 
 from casadi_posture import interrupt
+from casadi_posture.errors import CasadiPostureError
 from casadi_posture.output.low_back import step_low_back
 from casadi_posture.output.results import write_results
 from casadi_posture.output.scores import step_scores
@@ -85,13 +89,17 @@ def write_run(
     command prints its report."""
     out.mkdir(parents=True, exist_ok=True)
     spec = (out, command, figures, report)
-    if writers is not None and writers.serve(result):
-        done = writers.write(result, *spec, meanwhile=meanwhile)
-    else:
-        if workers > 1:  # measured once here, shared by the forked workers
-            step_scores(result)
-            step_low_back(result)
-        done = side_by_side(run_jobs(result, *spec), workers, meanwhile=meanwhile)
+    try:
+        if writers is not None and writers.serve(result):
+            done = writers.write(result, *spec, meanwhile=meanwhile)
+        else:
+            if workers > 1:  # measured once here, shared by the forked workers
+                step_scores(result)
+                step_low_back(result)
+            done = side_by_side(run_jobs(result, *spec), workers, meanwhile=meanwhile)
+    except BrokenProcessPool:
+        why = "ended abruptly (killed, or out of memory); the files it had written are kept"
+        raise CasadiPostureError(f"a process writing the files into {out} {why}") from None
     paths = [p for d in done if not isinstance(d, str) for p in d]
     missing = done[-1] if report and isinstance(done[-1], str) else None
     return RunFiles(paths, missing)
@@ -223,7 +231,8 @@ def _fork(workers: int, initializer: Callable[[], None]) -> ProcessPoolExecutor:
     frozen = gc.get_freeze_count() > 0
     gc.freeze()
     try:
-        pool = ProcessPoolExecutor(workers, multiprocessing.get_context("fork"), initializer)
+        starts = functools.partial(_worker_starts, os.getpid(), initializer)
+        pool = ProcessPoolExecutor(workers, multiprocessing.get_context("fork"), starts)
         pool.submit(os.getpid)  # a forking pool forks all its workers on its first job
     finally:
         if not frozen:
@@ -281,6 +290,22 @@ def _write_received(run: bytes, spec: tuple, workers: int) -> list[list[Path] | 
         step_scores(result)
         step_low_back(result)
     return side_by_side(run_jobs(result, *spec), workers, _STOP)
+
+
+def _worker_starts(parent: int, ready: Callable[[], None]) -> None:
+    """A forked worker ends with the process that forked it (Linux's parent-death
+    signal): a worker left behind would wait for jobs forever, and its copy of the pipe
+    that tells the parent's own parent that the parent ended would hide that end. Then
+    ``ready``."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    if os.getppid() != parent:  # it ended before the signal was asked for
+        os._exit(1)
+    ready()
+
+
+#: prctl's option that asks for a signal when the parent ends (linux/prctl.h).
+PR_SET_PDEATHSIG = 1
 
 
 def _ready(draws: bool) -> None:
