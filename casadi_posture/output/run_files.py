@@ -22,7 +22,7 @@ import pickle
 import signal
 import sys
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, replace
 from multiprocessing.synchronize import Event as EventType
@@ -93,10 +93,7 @@ def write_run(
         if writers is not None and writers.serve(result):
             done = writers.write(result, *spec, meanwhile=meanwhile)
         else:
-            if workers > 1:  # measured once here, shared by the forked workers
-                step_scores(result)
-                step_low_back(result)
-            done = side_by_side(run_jobs(result, *spec), workers, meanwhile=meanwhile)
+            done = _written(result, spec, workers, meanwhile=meanwhile)
     except BrokenProcessPool:
         why = "ended abruptly (killed, or out of memory); the files it had written are kept"
         raise CasadiPostureError(f"a process writing the files into {out} {why}") from None
@@ -120,6 +117,21 @@ def run_jobs(
     if report:
         jobs.append(lambda: _page(result, out / "report.html"))
     return jobs
+
+
+def _written(
+    result: SimulationResult,
+    spec: tuple[Path, list[str] | None, bool, bool],
+    workers: int,
+    stop: EventType | None = None,
+    meanwhile: Callable[[], object] | None = None,
+) -> list[list[Path] | str]:
+    """``run_jobs``' values by ``workers`` processes forked here (``side_by_side``); the
+    scores and the low-back loads measured first, once, for all of them."""
+    if workers > 1:
+        step_scores(result)
+        step_low_back(result)
+    return side_by_side(run_jobs(result, *spec), workers, stop, meanwhile)
 
 
 def _page(result: SimulationResult, path: Path) -> list[Path] | str:
@@ -220,7 +232,7 @@ def side_by_side(
     _JOBS = jobs
     pool = _fork(workers, interrupt.ignore_in_worker)
     try:
-        return _hand_out(lambda k: pool.submit(_inherited_job, k), workers, stop, meanwhile)
+        return _hand_out(pool, len(jobs), workers, stop, meanwhile)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         _JOBS = ()
@@ -244,35 +256,30 @@ def _fork(workers: int, initializer: Callable[[], None]) -> ProcessPoolExecutor:
 
 
 def _hand_out(
-    submit: Callable[[int], Future[tuple[int, T]]],
+    pool: ProcessPoolExecutor,
+    count: int,
     workers: int,
-    stop: EventType | None = None,
-    meanwhile: Callable[[], object] | None = None,
+    stop: EventType | None,
+    meanwhile: Callable[[], object] | None,
 ) -> list[T]:
-    """The jobs' values in order: job ``k`` handed to a worker (``submit``) when one is
-    free, ``workers`` at first, until a worker has said how many jobs there are; once
-    ``stop`` is set, none more (``KeyboardInterrupt`` when the jobs being run are done);
-    ``meanwhile`` run here once the first are handed out."""
-    count: int | None = None
-    indices = itertools.count()
-    running = {submit(k): k for k in itertools.islice(indices, workers)}
+    """The values of the ``count`` inherited jobs in order: job ``k`` handed to a worker
+    when one is free, ``workers`` at first; once ``stop`` is set, none more
+    (``KeyboardInterrupt`` when the jobs being run are done); ``meanwhile`` run here once
+    the first are handed out."""
+    waiting = iter(range(count))
+    running = {pool.submit(_inherited_job, k): k for k in itertools.islice(waiting, workers)}
     if meanwhile is not None:
         meanwhile()
     values: dict[int, T] = {}
     while running:
         done, _ = wait(running, return_when=FIRST_COMPLETED)
         for future in done:
-            k = running.pop(future)
-            count, value = future.result()
-            if k < count:
-                values[k] = value
-            following = next(indices)
+            values[running.pop(future)] = future.result()
             if stop is not None and stop.is_set():
                 running.clear()
                 raise KeyboardInterrupt
-            if following < count:
-                running[submit(following)] = following
-    return [values[k] for k in range(count or 0)]
+            running |= {pool.submit(_inherited_job, k): k for k in itertools.islice(waiting, 1)}
+    return [values[k] for k in range(count)]
 
 
 #: What the processes forked now inherit: the jobs (``side_by_side``); the problem of the
@@ -282,17 +289,13 @@ _PROBLEM: Problem | None = None
 _STOP: EventType | None = None
 
 
-def _inherited_job(k: int) -> tuple[int, object]:
-    return len(_JOBS), _JOBS[k]() if k < len(_JOBS) else None
+def _inherited_job(k: int) -> object:
+    return _JOBS[k]()
 
 
 def _write_received(run: bytes, spec: tuple, workers: int) -> list[list[Path] | str]:
     """In the ``Writers`` process: the run's files, by ``workers`` processes it forks."""
-    result = replace(pickle.loads(run), problem=_PROBLEM)
-    if workers > 1:  # measured once here, shared by the forked workers
-        step_scores(result)
-        step_low_back(result)
-    return side_by_side(run_jobs(result, *spec), workers, _STOP)
+    return _written(replace(pickle.loads(run), problem=_PROBLEM), spec, workers, _STOP)
 
 
 def _worker_starts(parent: int, ready: Callable[[], None]) -> None:
