@@ -101,10 +101,10 @@ def phases() -> list[list]:
         start = time.perf_counter()
         write_results(run.result, out, command=[])
         rows.append(["tables (CSV, Parquet, JSON)", time.perf_counter() - start])
-        for draw in simulation_figures(run.result, out):
+        for name, draw in simulation_figures(run.result, out).items():
             start = time.perf_counter()
-            path = draw()
-            rows.append([path.name, time.perf_counter() - start])
+            draw()
+            rows.append([name, time.perf_counter() - start])
         start = time.perf_counter()
         write_report(run.result, out / "report.html")
         rows.append(["report.html", time.perf_counter() - start])

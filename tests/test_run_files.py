@@ -17,7 +17,7 @@ import pytest
 from conftest import PROBLEMS
 
 from casadi_posture import api
-from casadi_posture.output.run_files import Writers, side_by_side, write_run
+from casadi_posture.output.run_files import Writers, longest_first, side_by_side, write_run
 
 #: The 3-D standing hold for 300 s: the constraint takes over at 244 s, so every figure
 #: of a 3-D body is drawn (scores, low back, regions) with something in it.
@@ -111,6 +111,27 @@ def test_a_job_s_error_is_raised_here(tmp_path) -> None:
     assert side_by_side([lambda: 1, lambda: os.getpid()], 1) == [1, os.getpid()]  # here
 
 
+def test_jobs_are_handed_out_in_the_order_asked_and_answered_in_their_own(tmp_path) -> None:
+    def job(k: int):
+        def started() -> int:
+            (tmp_path / f"start{k}").write_text(str(time.monotonic()))
+            time.sleep(0.2)
+            return k
+
+        return started
+
+    assert side_by_side([job(k) for k in range(4)], 2, order=[3, 2, 1, 0]) == [0, 1, 2, 3]
+    start = {k: float((tmp_path / f"start{k}").read_text()) for k in range(4)}
+    assert max(start[3], start[2]) < min(start[1], start[0])
+
+
+def test_the_longest_files_are_written_first() -> None:
+    names = ["tables", "fatigue.png", "effector.png", "postures.png", "scores.png", "x.png"]
+    order = [names[k] for k in longest_first(names)]
+    assert order[0] == "postures.png" and order[1] == "scores.png"
+    assert order[-2:] == ["fatigue.png", "effector.png"] and sorted(order) == sorted(names)
+
+
 #: Four jobs of 1.5 s on two workers, each leaving a mark when it starts and its file when
 #: it ends; the result and whether Ctrl-C was heard printed at the end.
 SCRIPT = """
@@ -198,7 +219,7 @@ def sleeping(result, folder, command, figures, report):
     def job():
         (out / f"worker{os.getpid()}").touch()
         time.sleep(60)
-    return [job, job]
+    return {"one": job, "two": job}
 
 run_files.run_jobs = sleeping
 problem = api.load(sys.argv[2], {"simulation.duration_s": 5.0})

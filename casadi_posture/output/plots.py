@@ -430,15 +430,15 @@ def plot_postures(result: SimulationResult, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-def simulation_figures(result: SimulationResult, out: Path) -> list[Callable[[], Path]]:
-    """Each figure of a simulation into ``out``, to be drawn (none for a run stopped before
-    its first step): postures.png in the plane of motion for a planar body, in four views
-    for a 3-D one; fatigue_regions.png for a body of more than one region; schedule.png
-    for a run with a work–rest schedule; scores.png (RULA and REBA) for a body they fit;
-    low_back.png (compression and shear at L5/S1) for a body with a lumbar joint. Each
-    draws on its own, in any order or process."""
+def simulation_figures(result: SimulationResult, out: Path) -> dict[str, Callable[[], Path]]:
+    """Each figure of a simulation into ``out`` by its file's name, to be drawn (none for a
+    run stopped before its first step): postures.png in the plane of motion for a planar
+    body, in four views for a 3-D one; fatigue_regions.png for a body of more than one
+    region; schedule.png for a run with a work–rest schedule; scores.png (RULA and REBA)
+    for a body they fit; low_back.png (compression and shear at L5/S1) for a body with a
+    lumbar joint. Each draws on its own, in any order or process."""
     if result.timeline.time.size == 0:
-        return []
+        return {}
     body = result.problem.body
     draw_postures = plot_postures if body.planar else plot_postures_3d
     figures = [
@@ -453,8 +453,8 @@ def simulation_figures(result: SimulationResult, out: Path) -> list[Callable[[],
         figures.append((plot_schedule, "schedule.png"))
     if body_kind(body) is not None:
         figures.append((plot_scores, "scores.png"))
-    drawn = [functools.partial(draw, result, out / name) for draw, name in figures]
+    drawn = {name: functools.partial(draw, result, out / name) for draw, name in figures}
     back = step_low_back(result)
     if back is not None:
-        drawn.append(functools.partial(plot_low_back, result, back, out / "low_back.png"))
+        drawn["low_back.png"] = functools.partial(plot_low_back, result, back, out / "low_back.png")
     return drawn

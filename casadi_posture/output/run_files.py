@@ -42,6 +42,20 @@ T = TypeVar("T")
 
 #: Most worker processes that write one run's files (it has at most 11 of them).
 MOST_WORKERS = 4
+#: CPU time [s] of each file's job on the 20-minute hold of the 29-DOF body, measured by
+#: benchmarks/command.py; an unlisted file counts 0.1 s. Handed out the longest first,
+#: these jobs end on two cores 0.06 s sooner than in the files' order (0.67 s, not 0.73).
+JOB_SECONDS = {
+    "postures.png": 0.30,
+    "scores.png": 0.20,
+    "active_torque.png": 0.15,
+    "low_back.png": 0.15,
+    "tables": 0.14,
+    "report.html": 0.14,
+    "fatigue_regions.png": 0.11,
+    "fatigue.png": 0.07,
+    "effector.png": 0.07,
+}
 
 
 @dataclass(frozen=True)
@@ -104,19 +118,27 @@ def write_run(
 
 def run_jobs(
     result: SimulationResult, out: Path, command: list[str] | None, figures: bool, report: bool
-) -> list[Callable[[], list[Path] | str]]:
-    """Each file's job, in the order of ``RunFiles.paths``: the tables, each figure, the
-    page (its paths, or why the page was not written)."""
-    jobs: list[Callable[[], list[Path] | str]] = [
-        lambda: write_results(result, out, command=command)
-    ]
+) -> dict[str, Callable[[], list[Path] | str]]:
+    """Each file's job by the file's name ("tables" for the tables), in the order of
+    ``RunFiles.paths``: the tables, each figure, the page (its paths, or why the page was
+    not written)."""
+    jobs: dict[str, Callable[[], list[Path] | str]] = {
+        "tables": lambda: write_results(result, out, command=command)
+    }
     if figures:
         from casadi_posture.output.plots import simulation_figures  # imported when drawn
 
-        jobs += [lambda draw=draw: [draw()] for draw in simulation_figures(result, out)]
+        drawn = simulation_figures(result, out).items()
+        jobs |= {name: lambda draw=draw: [draw()] for name, draw in drawn}
     if report:
-        jobs.append(lambda: _page(result, out / "report.html"))
+        jobs["report.html"] = lambda: _page(result, out / "report.html")
     return jobs
+
+
+def longest_first(names: Sequence[str]) -> list[int]:
+    """The jobs' indices in the order they are handed out: by ``JOB_SECONDS``, longest
+    first (the longest-processing-time rule: the last job to end is a short one)."""
+    return sorted(range(len(names)), key=lambda k: -JOB_SECONDS.get(names[k], 0.1))
 
 
 def _written(
@@ -126,12 +148,14 @@ def _written(
     stop: EventType | None = None,
     meanwhile: Callable[[], object] | None = None,
 ) -> list[list[Path] | str]:
-    """``run_jobs``' values by ``workers`` processes forked here (``side_by_side``); the
-    scores and the low-back loads measured first, once, for all of them."""
+    """``run_jobs``' values by ``workers`` processes forked here (``side_by_side``), the
+    longest first; the scores and the low-back loads measured first, once, for all."""
     if workers > 1:
         step_scores(result)
         step_low_back(result)
-    return side_by_side(run_jobs(result, *spec), workers, stop, meanwhile)
+    jobs = run_jobs(result, *spec)
+    order = longest_first(list(jobs))
+    return side_by_side(list(jobs.values()), workers, stop, meanwhile, order)
 
 
 def _page(result: SimulationResult, path: Path) -> list[Path] | str:
@@ -216,13 +240,15 @@ def side_by_side(
     workers: int,
     stop: EventType | None = None,
     meanwhile: Callable[[], object] | None = None,
+    order: Sequence[int] | None = None,
 ) -> list[T]:
     """Each job's value, in order; run by ``workers`` processes forked from this one now
     (they ignore Ctrl-C, which the terminal sends them too: this process decides), or here
     one after the other. A job's exception is raised here; a second Ctrl-C here lets the
     jobs being run finish (no half-written file) and drops the others, which are handed
     to a worker only when one is free (as they are once ``stop`` is set). ``meanwhile``
-    runs here once the first jobs are handed out (first, when they are run here)."""
+    runs here once the first jobs are handed out (first, when they are run here). The
+    jobs are handed out in ``order`` (indices; by default, theirs)."""
     workers = min(workers, len(jobs))
     if workers <= 1 or not _forks():
         if meanwhile is not None:
@@ -232,7 +258,7 @@ def side_by_side(
     _JOBS = jobs
     pool = _fork(workers, interrupt.ignore_in_worker)
     try:
-        return _hand_out(pool, len(jobs), workers, stop, meanwhile)
+        return _hand_out(pool, order or range(len(jobs)), workers, stop, meanwhile)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
         _JOBS = ()
@@ -257,16 +283,16 @@ def _fork(workers: int, initializer: Callable[[], None]) -> ProcessPoolExecutor:
 
 def _hand_out(
     pool: ProcessPoolExecutor,
-    count: int,
+    order: Sequence[int],
     workers: int,
     stop: EventType | None,
     meanwhile: Callable[[], object] | None,
 ) -> list[T]:
-    """The values of the ``count`` inherited jobs in order: job ``k`` handed to a worker
-    when one is free, ``workers`` at first; once ``stop`` is set, none more
+    """The values of the inherited jobs in their own order, handed to a worker in
+    ``order`` when one is free, ``workers`` at first; once ``stop`` is set, none more
     (``KeyboardInterrupt`` when the jobs being run are done); ``meanwhile`` run here once
     the first are handed out."""
-    waiting = iter(range(count))
+    waiting = iter(order)
     running = {pool.submit(_inherited_job, k): k for k in itertools.islice(waiting, workers)}
     if meanwhile is not None:
         meanwhile()
@@ -279,7 +305,7 @@ def _hand_out(
                 running.clear()
                 raise KeyboardInterrupt
             running |= {pool.submit(_inherited_job, k): k for k in itertools.islice(waiting, 1)}
-    return [values[k] for k in range(count)]
+    return [values[k] for k in range(len(order))]
 
 
 #: What the processes forked now inherit: the jobs (``side_by_side``); the problem of the
