@@ -98,6 +98,21 @@ def test_the_mannequin_s_extent_is_that_of_every_point_placed(standing) -> None:
     np.testing.assert_allclose(total / count, every.mean(axis=0), atol=1e-12)
 
 
+def test_a_skeleton_placed_at_a_few_steps_is_the_whole_one_there(standing) -> None:
+    """A figure's few postures placed alone (``steps``) are those of the whole run's
+    skeleton; the rows not placed are NaN, never a wrong posture."""
+    run, _, _ = standing
+    body, q = run.result.problem.body, run.result.timeline.q
+    whole, steps = Skeleton(body, q), [250, 0, 250, 299]
+    few = Skeleton(body, q, steps=steps)
+    for step in steps:
+        np.testing.assert_allclose(few.points[step], whole.points[step], atol=1e-12)
+        np.testing.assert_allclose(few.com[step], whole.com[step], atol=1e-12)
+        for a, b in zip(few.solids(step), whole.solids(step), strict=True):
+            np.testing.assert_allclose(a, b, atol=1e-12)
+    assert np.isnan(few.points[120]).all() and np.isnan(few.com[120]).all()
+
+
 def test_the_placements_move_the_mannequin_where_the_skeleton_puts_it(standing) -> None:
     """The page moves each part by its frame's placement (t + R·x0); at a step after the
     posture changed this gives the skeleton's own solids (output/skeleton.py)."""

@@ -145,7 +145,7 @@ class Scene:
     """The skeleton of ``problem``'s body at the postures ``q`` (rows [rad]), its centre of
     mass, support polygons, the ``tasks``' shapes and the loads, the ``task_limbs`` (those
     that carry a task's effector or segment or a load), and a box [m] around them at the
-    rows ``steps`` that will be drawn."""
+    rows ``steps`` that will be drawn (a 3-D body is placed at those rows only)."""
 
     def __init__(
         self, problem: Problem, tasks: Sequence[Task], q: np.ndarray, steps: list[int]
@@ -156,7 +156,8 @@ class Scene:
         self.loads = [(at, force, load) for at, force, load in forces if force.any()]
         extra = tuple(dict.fromkeys(at for at, _, _ in self.loads))
         carried = tuple((load.at, load.mass) for load in problem.loads if load.mass > 0)
-        self.skeleton = Skeleton(problem.body, q, extra, carried)
+        placed = None if problem.body.planar else steps  # a plane is found from all steps
+        self.skeleton = Skeleton(problem.body, q, extra, carried, placed)
         self.shapes = task_shapes(tuple(tasks))
         effectors = [getattr(task, "effector", None) for task in tasks]
         effectors += [at for at, _, _ in self.loads]

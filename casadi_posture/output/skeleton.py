@@ -58,7 +58,8 @@ class Skeleton:
     of the body and the ``carried`` point masses (landmark, kg), as the balance counts it),
     and the positions of the landmarks in ``extra`` (loads, effectors) as points too; the
     mannequin's ``parts`` (none for a body that is not human) and the placement of their
-    frames at every step (``solids``)."""
+    frames at every step (``solids``). With ``steps``, only those rows of ``q`` are placed
+    (the others are NaN): a figure of a few postures of a long run."""
 
     def __init__(
         self,
@@ -66,6 +67,7 @@ class Skeleton:
         q: np.ndarray,
         extra: tuple[str, ...] = (),
         carried: tuple[tuple[str, float], ...] = (),
+        steps: list[int] | None = None,
     ) -> None:
         bones = _bones(body)
         keys = list(dict.fromkeys([k for bone in bones for k in bone]))
@@ -88,16 +90,21 @@ class Skeleton:
             ca.horzcat(ca.SX(3, 0), *placements),
         ]
         q = np.atleast_2d(q) if len(q) else np.zeros((1, body.n))
+        rows = np.arange(len(q)) if steps is None else np.unique(np.asarray(steps, dtype=int))
         function = ca.Function("skeleton", [body.q], outputs)
-        points, com, placed = function.map(len(q))(q.T)  # 3 × (points·steps), 3 × steps, ...
-        self.points = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
-        self.com = np.asarray(com).T
+        points, com, placed = function.map(len(rows))(q[rows].T)  # 3 × (points·rows), ...
+        self.points = np.full((len(q), 3, len(keys)), np.nan)
+        self.points[rows] = np.asarray(points).reshape(3, -1, len(keys)).transpose(1, 0, 2)
+        self.com = np.full((len(q), 3), np.nan)
+        self.com[rows] = np.asarray(com).T
         #: steps × frames × 3 × 4: each frame's translation [m] and rotation (world = t + R x0)
-        self._placed = np.asarray(placed).reshape(3, len(q), len(frames), 4).transpose(1, 2, 0, 3)
+        self._placed = np.full((len(q), len(frames), 3, 4), np.nan)
+        shape = (3, len(rows), len(frames), 4)
+        self._placed[rows] = np.asarray(placed).reshape(shape).transpose(1, 2, 0, 3)
         self._frame = [frames.index(part.dof) for part in self.parts]
         self._zero = [part.points() for part in self.parts]
         self.planar = body.planar
-        spread = np.ptp(self.points.transpose(1, 0, 2).reshape(3, -1), axis=1)
+        spread = np.ptp(self.points[rows].transpose(1, 0, 2).reshape(3, -1), axis=1)
         self.plane = tuple(sorted(int(i) for i in np.argsort(spread)[-2:]))
         self.depth = next(i for i in range(3) if i not in self.plane)
 
