@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from matplotlib import rc_context
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 #: zlib level of the PNG files: a run's seven figures compress in 0.10 s instead of 0.15 s
@@ -20,10 +21,12 @@ def save_figure(fig: Figure, path: Path, *, tight: bool = True) -> Path:
     Figures are made with ``matplotlib.figure.Figure``, not pyplot: nothing holds them
     once written, and no backend is chosen for the user's own plots, whose settings are
     left as they were."""
+    png = path.suffix.lower() == ".png"
+    if png:  # the layout then measures the text with the renderer that draws it
+        FigureCanvasAgg(fig)
     with rc_context(TEXT):
         if tight:
             fig.tight_layout()
         path.parent.mkdir(parents=True, exist_ok=True)
-        png = path.suffix.lower() == ".png"
         fig.savefig(path, **({"pil_kwargs": {"compress_level": PNG_COMPRESSION}} if png else {}))
     return path
