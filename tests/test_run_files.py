@@ -11,12 +11,14 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 from conftest import PROBLEMS
 
 from casadi_posture import api
+from casadi_posture.output.per_run import once_per_run
 from casadi_posture.output.run_files import Writers, longest_first, side_by_side, write_run
 
 #: The 3-D standing hold for 300 s: the constraint takes over at 244 s, so every figure
@@ -56,6 +58,16 @@ def test_writers_forked_before_the_run_write_the_same_files(standing, tmp_path) 
         if a.name != "manifest.json":
             assert a.read_bytes() == b.read_bytes(), a.name
     assert Writers(1, standing.result.problem).workers == 1  # nothing forked: written here
+
+
+def test_a_measure_sent_with_the_run_is_not_measured_again(standing) -> None:
+    """The ``Writers`` process keeps the scores measured by the command (``remember``)."""
+    calls = []
+    measure = once_per_run(lambda result: calls.append(result) or len(calls))
+    assert measure(standing.result) == 1 and measure(standing.result) == 1
+    other = replace(standing.result)
+    assert measure.remember(other, 7) == 7 and measure(other) == 7 and len(calls) == 1
+    assert measure(standing.result) == 2  # only the last run is kept
 
 
 def test_the_commands_modules_load_no_drawing_module_before_the_run(tmp_path) -> None:

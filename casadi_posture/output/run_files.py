@@ -220,10 +220,13 @@ class Writers:
         meanwhile: Callable[[], object] | None = None,
     ) -> list[list[Path] | str]:
         """``run_jobs``' values: the run goes to the process pickled, without its problem
-        (it was forked with it), and its workers run the jobs while ``meanwhile`` runs
-        here. A second Ctrl-C here lets the jobs being run finish and drops the others."""
+        (it was forked with it), with its scores and low-back loads measured here while
+        the process still imports (``meanwhile`` needs them too), and its workers run the
+        jobs while ``meanwhile`` runs here. A second Ctrl-C here lets the jobs being run
+        finish and drops the others."""
         assert self._pool is not None and self.serve(result)
-        run = pickle.dumps(replace(result, problem=None), pickle.HIGHEST_PROTOCOL)
+        measured = (replace(result, problem=None), step_scores(result), step_low_back(result))
+        run = pickle.dumps(measured, pickle.HIGHEST_PROTOCOL)
         spec = (out, command, figures, report)
         written = self._pool.submit(_write_received, run, spec, self.workers)
         try:
@@ -321,7 +324,11 @@ def _inherited_job(k: int) -> object:
 
 def _write_received(run: bytes, spec: tuple, workers: int) -> list[list[Path] | str]:
     """In the ``Writers`` process: the run's files, by ``workers`` processes it forks."""
-    return _written(replace(pickle.loads(run), problem=_PROBLEM), spec, workers, _STOP)
+    received, scores, back = pickle.loads(run)
+    result = replace(received, problem=_PROBLEM)
+    step_scores.remember(result, scores)
+    step_low_back.remember(result, back)
+    return _written(result, spec, workers, _STOP)
 
 
 def _worker_starts(parent: int, ready: Callable[[], None]) -> None:
