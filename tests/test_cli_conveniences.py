@@ -218,6 +218,19 @@ def test_rerun_flags_a_manifest_without_its_summary(tmp_path: Path) -> None:
     assert result.exit_code == 1 and "FLAGGED: no summary.json" in result.output
 
 
+def test_rerun_refuses_the_manifest_s_own_folder(tmp_path: Path) -> None:
+    """Written there, the rerun would be compared with itself and always be identical."""
+    runner = CliRunner()
+    out = tmp_path / "run"
+    args = ["simulate", str(HOLD), "--duration", "5", "--out", str(out)]
+    assert runner.invoke(main, args).exit_code == 0
+    before = (out / "summary.json").read_bytes()
+    args = ["rerun", str(out / "manifest.json"), "--out", str(out), "--force"]
+    result = runner.invoke(main, args)
+    assert result.exit_code == 2 and "a folder apart from the manifest's" in result.stderr
+    assert (out / "summary.json").read_bytes() == before
+
+
 def test_validate_reports_every_file_and_reads_folders(tmp_path: Path) -> None:
     (tmp_path / "bad.toml").write_text("x = 1\n")
     (tmp_path / "good.toml").write_text(HOLD.read_text())

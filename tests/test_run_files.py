@@ -19,7 +19,13 @@ from conftest import PROBLEMS
 
 from casadi_posture import api
 from casadi_posture.output.per_run import once_per_run
-from casadi_posture.output.run_files import Writers, longest_first, side_by_side, write_run
+from casadi_posture.output.run_files import (
+    RUN_FILES,
+    Writers,
+    longest_first,
+    side_by_side,
+    write_run,
+)
 
 #: The 3-D standing hold for 300 s: the constraint takes over at 244 s, so every figure
 #: of a 3-D body is drawn (scores, low back, regions) with something in it.
@@ -42,6 +48,23 @@ def test_side_by_side_writes_the_same_files_as_one_after_the_other(standing, tmp
     for a, b in zip(one.paths, two.paths, strict=True):
         if a.name != "manifest.json":  # it records when it was written
             assert a.read_bytes() == b.read_bytes(), a.name
+
+
+def test_an_earlier_run_s_files_are_not_left_beside_a_new_one(tmp_path) -> None:
+    """Written over (``--force``), a folder keeps no file of the earlier run (here the
+    low back of a 3-D body, a schedule, an animation, a page) that the new one does not
+    write again (a planar run without its page), and keeps the user's own."""
+    earlier = ["schedule.png", "low_back.png", "animation.gif", "report.html"]
+    for name in [*earlier, "fatigue.png", "notes.txt"]:
+        (tmp_path / name).write_text("earlier")
+    run = api.simulate(api.load(PROBLEMS / "holding_m45.toml", {"simulation.duration_s": 5.0}))
+    files = write_run(run.result, tmp_path, report=False)
+    assert not any((tmp_path / name).exists() for name in earlier)
+    assert (tmp_path / "notes.txt").read_text() == "earlier"
+    assert (tmp_path / "fatigue.png").read_bytes().startswith(b"\x89PNG")  # the new one
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == sorted([*(p.name for p in files.paths), "notes.txt"])
+    assert {p.name for p in files.paths} <= set(RUN_FILES)
 
 
 def test_writers_forked_before_the_run_write_the_same_files(standing, tmp_path) -> None:

@@ -179,6 +179,9 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
     path = Path(manifest)
     record = _manifest(path)
     out = out or path.parent.with_name(path.parent.name + "-rerun")
+    if out.resolve() == path.parent.resolve():  # it would be compared with itself
+        expected = "a folder apart from the manifest's (the rerun is compared with it)"
+        raise ProblemError(None, "--out", str(out), expected)
     with interrupt.deferred():
         api.check_out(out, force=force)
         try:

@@ -42,6 +42,27 @@ T = TypeVar("T")
 
 #: Most worker processes that write one run's files (it has at most 11 of them).
 MOST_WORKERS = 4
+#: Every file a run writes into its folder, figures and animation included: those of an
+#: earlier run there (``--force``) are deleted first, so that none is left beside a new
+#: run it does not belong to (a figure the new run does not draw, or is stopped before).
+RUN_FILES = (
+    "timeline.csv",
+    "timeline.parquet",
+    "events.csv",
+    "summary.json",
+    "manifest.json",
+    "fatigue.png",
+    "effector.png",
+    "active_torque.png",
+    "postures.png",
+    "fatigue_regions.png",
+    "schedule.png",
+    "scores.png",
+    "low_back.png",
+    "report.html",
+    "animation.gif",
+    "animation.mp4",
+)
 #: CPU time [s] of each file's job on the 20-minute hold of the 29-DOF body, measured by
 #: benchmarks/command.py; an unlisted file counts 0.1 s. Handed out the longest first,
 #: these jobs end on two cores 0.06 s sooner than in the files' order (0.67 s, not 0.73).
@@ -97,11 +118,14 @@ def write_run(
     meanwhile: Callable[[], object] | None = None,
 ) -> RunFiles:
     """The run's tables, (with ``figures``) its figures and (with ``report``) report.html
-    into ``out``, by the ``writers`` forked before the run, else by ``workers`` processes
-    forked now (1: in this one); ``command`` is recorded in the manifest. ``meanwhile``
-    runs in this process while they are written (before, when they are written here): a
-    command prints its report."""
+    into ``out`` (an earlier run's files there deleted first: ``RUN_FILES``), by the
+    ``writers`` forked before the run, else by ``workers`` processes forked now (1: in
+    this one); ``command`` is recorded in the manifest. ``meanwhile`` runs in this process
+    while they are written (before, when they are written here): a command prints its
+    report."""
     out.mkdir(parents=True, exist_ok=True)
+    for name in RUN_FILES:
+        (out / name).unlink(missing_ok=True)
     spec = (out, command, figures, report)
     try:
         if writers is not None and writers.serve(result):
