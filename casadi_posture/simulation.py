@@ -252,6 +252,10 @@ class _Solvers:
             self._other = cached_solver(self.other_name, self._hierarchy, spec)
         return self._other
 
+    def named(self, name: str) -> Solver:
+        """The primary solver or the other one, by its ``name``."""
+        return self.primary if name == self.primary.name else self.fallback()
+
 
 def simulate(
     problem: Problem, solver: str | None = None, *, stop_at_threshold: bool = False
@@ -683,7 +687,10 @@ def _plan_constraint(
 
 def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: float) -> None:
     """The step's posture: the last one when nothing changed, else the IK's (with fallback)
-    from the posture ``_predicted`` for the step."""
+    from the posture ``_predicted`` for the step, solved again by the same solver under the
+    plane's other side when the other tasks carried it past the plane's step
+    (``FatigueConstraint.overshot``); that answer is kept when it converges and loses no
+    level 1 the first held, else the first stands."""
     tic = time.perf_counter()
     result = state.result
     unchanged = (
@@ -700,6 +707,13 @@ def _solve_ik(run: _Setup, state: _State, inequality: Inequality | None, now: fl
         result, spent, detail = _solve_step(
             solvers, state.q, inequality, retry=state.held, start=start
         )
+        swapped = None if inequality is None else run.constraint.overshot(inequality, result.q)
+        if swapped is not None and result.success:  # by the same solver, or not at all
+            again = solvers.named(result.solver).solve(state.q, swapped)
+            spent += again.iterations
+            if again.success and (again.achieved[0] or not result.achieved[0]):
+                result, inequality = again, swapped
+                run.constraint.hold(swapped)
         if kept:
             result = replace(result, residuals=run.hierarchy.residual_norms(result.q))
         state.iterations += spent

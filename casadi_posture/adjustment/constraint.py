@@ -16,6 +16,17 @@ term's direction instead, the owner sprang back from its goal to the lower task'
 and out again; with the α term in the offset, the plane drifted a little every step and
 took the top task with it).
 
+The plane asks for a step of ‖Δq‖ towards the goal and bounds it on one side only. When
+the tasks below would carry the posture farther than that, of their own accord (the goal
+lies on the way to their own optimum: after the owner's torque changed sign, case 1.3, the
+comfort level swung a seated worker's shoulder 85° back to its tiring start in one second
+and the load rose from 0 to 21 %MVC every minute while the constraint stayed on), the
+posture solved under the plane lies beyond it by more than Δq_max (``overshot``): the step
+is solved again with the plane's sides swapped, aᵀq ≥ b, which lets the posture move the
+asked step and no farther (the plane held from then on is the swapped one). The owner
+then moves towards its goal at the pace β and Δq_max set, whichever side the other tasks
+pull it to.
+
 When the algorithm keeps the owner's angle (no angle of its joint carries less active torque,
 "kept θc") and the α term has no direction, no plane is built: the goal is still reported,
 and the step keeps its posture.
@@ -196,6 +207,23 @@ class FatigueConstraint:
         held = np.zeros_like(dq)
         held[j] = dq[j]
         return self._plane(q, dq, abs(dq[j]), held), goal
+
+    def overshot(self, inequality: Inequality, q: np.ndarray) -> Inequality | None:
+        """The paper's plane with its sides swapped, −aᵀq ≤ −b, when the posture ``q``
+        [rad] solved under ``inequality`` lies beyond it by more than Δq_max (the other
+        tasks carried it past the asked step); else None, and always None under the
+        whole-body adjustment (its bound is a load, not a step)."""
+        if self.whole_body is not None:
+            return None
+        if inequality.b - float(inequality.a @ q) <= self.settings.max_step:
+            return None
+        return Inequality(-inequality.a, -inequality.b)
+
+    def hold(self, inequality: Inequality) -> None:
+        """``inequality`` was the step's plane (a swapped one): the plane held from now on
+        keeps its direction."""
+        if self.whole_body is None:
+            self._direction = inequality.a
 
     def _whole_body(self, q: np.ndarray) -> tuple[Inequality | None, Goal]:
         """The whole-body adjustment's load bound (whole_body.py) and what it does."""
