@@ -8,7 +8,7 @@ are written one after the other. The workers are forked after the run: they shar
 memory. A command forks, before its run, one process that imports matplotlib and the
 drawing modules while the run goes on (``Writers``); it receives the run, without its
 problem (it has it), and forks the workers. A 20-minute hold of the 29-DOF body has about
-1.6 s of drawing and writing: 0.8 s on two cores."""
+1.4 s of drawing and writing: 0.7 s on two cores, handed out the longest first."""
 
 from __future__ import annotations
 
