@@ -242,6 +242,11 @@ def test_compare_prediction_sets_the_recording_beside_the_model(tmp_path: Path) 
     held = run.summary()["task"]["held_s"]
     assert outcomes["task held (s)"]["predicted"] == pytest.approx(held)
     assert (out / "predicted" / "summary.json").exists()
+    (out / "predicted" / "notes.txt").write_text("mine")
+    again = ["evaluate", ARM, "--motion", str(path), "--out", str(out), "--force"]
+    assert CliRunner().invoke(main, again).exit_code in (0, 1)
+    assert not (out / "prediction.csv").exists() and not (out / "prediction.json").exists()
+    assert [p.name for p in (out / "predicted").iterdir()] == ["notes.txt"]  # only the user's
 
 
 def test_a_load_held_only_in_its_window(tmp_path: Path) -> None:

@@ -24,8 +24,10 @@ from casadi_posture.cli.runs import echo_files, report_recording, write_run
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
 from casadi_posture.runs.prediction import (
+    PREDICTED,
     SHOWN_DOFS,
     PredictionComparison,
+    clear_prediction,
     compare_prediction,
     write_prediction,
 )
@@ -142,6 +144,7 @@ def evaluate(
         read_s = time.perf_counter() - started
         out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
         api.check_out(out, force=force)
+        clear_prediction(out)  # an earlier evaluation's comparison, not this one's
         run = api.evaluate(resolved, recording)
         shown = functools.partial(report_recording, run, law(resolved), show_all, read_s=read_s)
         files, code = write_run(run, out, command_line(), shown, report=not no_report)
@@ -149,7 +152,7 @@ def evaluate(
         if compare and run.stop != "interrupted":
             comparison = compare_prediction(run.result.problem, run.result)
             predicted = api.Simulation(comparison.predicted)
-            extra, _ = write_run(predicted, out / "predicted", command_line(), report=not no_report)
+            extra, _ = write_run(predicted, out / PREDICTED, command_line(), report=not no_report)
             extra += write_prediction(comparison, out)
             _echo_prediction(comparison, extra)
             code = code or (1 if comparison.predicted_summary["flags"] else 0)

@@ -14,6 +14,7 @@ import numpy as np
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.plain import dumps
 from casadi_posture.output.results import summary, time_mean, write_table
+from casadi_posture.output.run_files import RUN_FILES
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.simulation import SimulationResult, simulate
 
@@ -97,12 +98,29 @@ def compare_prediction(problem: Problem, recorded: SimulationResult) -> Predicti
     return PredictionComparison(recorded, predicted, summary(recorded), summary(predicted))
 
 
+#: The comparison's own files in an evaluation's folder; its predicted run is in PREDICTED.
+PREDICTION_FILES, PREDICTED = ("prediction.csv", "prediction.json"), "predicted"
+
+
+def clear_prediction(out: Path) -> None:
+    """Delete an earlier comparison's files from ``out`` (an evaluation written over with
+    ``--force``): prediction.csv and .json, and the predicted run's files, with their folder
+    when nothing else is in it; a user's own files are kept."""
+    for name in PREDICTION_FILES:
+        (out / name).unlink(missing_ok=True)
+    folder = out / PREDICTED
+    if folder.is_dir():
+        for name in RUN_FILES:
+            (folder / name).unlink(missing_ok=True)
+        if not any(folder.iterdir()):
+            folder.rmdir()
+
+
 def write_prediction(comparison: PredictionComparison, out: Path) -> list[Path]:
     """prediction.csv (the postures, DOF by DOF) and prediction.json (the outcomes side by side
     and the postures) into ``out``."""
     rows = comparison.postures()
-    table = out / "prediction.csv"
+    table, data = (out / name for name in PREDICTION_FILES)
     write_table({k: [r[k] for r in rows] for k in rows[0]}, table)
-    data = out / "prediction.json"
     data.write_text(dumps({"outcomes": comparison.outcomes(), "postures": rows}) + "\n")
     return [table, data]
