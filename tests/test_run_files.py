@@ -48,6 +48,7 @@ def test_side_by_side_writes_the_same_files_as_one_after_the_other(standing, tmp
     for a, b in zip(one.paths, two.paths, strict=True):
         if a.name != "manifest.json":  # it records when it was written
             assert a.read_bytes() == b.read_bytes(), a.name
+    assert set(names) <= set(RUN_FILES)  # a later run written over it deletes every one
 
 
 def test_an_earlier_run_s_files_are_not_left_beside_a_new_one(tmp_path) -> None:

@@ -390,8 +390,8 @@ def write_results(
     write_table(columns, paths[0])
     try:
         from casadi_posture.output.arrow_columns import write_parquet
-    except ImportError:  # no Parquet: none left from an earlier run beside the new CSV
-        (out / "timeline.parquet").unlink(missing_ok=True)
+    except ImportError:  # no pyarrow, no Parquet (write_run deleted an earlier run's)
+        pass
     else:
         paths.append(out / "timeline.parquet")
         write_parquet(columns, paths[-1])

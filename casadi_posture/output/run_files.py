@@ -33,6 +33,7 @@ from typing import TypeVar
 from casadi_posture import interrupt
 from casadi_posture.errors import CasadiPostureError
 from casadi_posture.output.low_back import step_low_back
+from casadi_posture.output.movie_formats import WRITERS
 from casadi_posture.output.results import write_results
 from casadi_posture.output.scores import step_scores
 from casadi_posture.problem import Problem
@@ -60,8 +61,7 @@ RUN_FILES = (
     "scores.png",
     "low_back.png",
     "report.html",
-    "animation.gif",
-    "animation.mp4",
+    *(f"animation.{name}" for name in WRITERS),
 )
 #: CPU time [s] of each file's job on the 20-minute hold of the 29-DOF body, measured by
 #: benchmarks/command.py; an unlisted file counts 0.1 s. Handed out the longest first,
