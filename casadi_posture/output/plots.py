@@ -23,7 +23,7 @@ from casadi_posture.output.figures3d import plot_postures_3d
 from casadi_posture.output.key_postures import key_postures, recoveries, title
 from casadi_posture.output.low_back import step_low_back
 from casadi_posture.output.low_back_plots import plot_low_back
-from casadi_posture.output.saving import save_figure
+from casadi_posture.output.saving import lay_out, save_figure
 from casadi_posture.output.schedule_plots import plot_schedule
 from casadi_posture.output.score_plots import plot_scores
 from casadi_posture.output.skeleton import Skeleton
@@ -219,7 +219,7 @@ def fatigue_regions_figure(result: SimulationResult) -> Figure:
     if quiet:
         below = f"below {100 * REGION_MIN_FATIGUE:g} % fatigue throughout: {', '.join(quiet)}"
         fig.text(0.01, 0.1 / height, below, fontsize=7)
-    fig.tight_layout(rect=(0, 0.25 / height, 1, 1 - 0.55 / height))
+    lay_out(fig, rect=(0, 0.25 / height, 1, 1 - 0.55 / height))
     return fig
 
 

