@@ -500,7 +500,7 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     for k, half in enumerate(halves):
         columns[f"fatigue_{half}"] = tl.fatigue[:, k].tolist()
     for k, half in enumerate(halves):
-        columns[f"fatigued_{half}"] = [int(v) for v in tl.fatigued[:, k]]
+        columns[f"fatigued_{half}"] = tl.fatigued[:, k].astype(int).tolist()
     columns["constraint_owner"] = [halves[o] if o >= 0 else None for o in tl.owner]
     columns["goal_angle_deg"] = [None if math.isnan(g) else math.degrees(g) for g in tl.goal]
     columns["goal_case"] = [c or None for c in tl.case]
@@ -509,7 +509,7 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
     columns["ik_solver"] = [s or None for s in tl.solver]
     if tl.held is not None:
         for j, load in enumerate(result.problem.loads):
-            columns[f"held_{load.name}"] = [int(v) for v in tl.held[:, j]]
+            columns[f"held_{load.name}"] = tl.held[:, j].astype(int).tolist()
     recording = result.recording
     for name, residual in ((recording and recording.residuals) or {}).items():
         unit, scale = recording.residual_unit
@@ -526,7 +526,10 @@ def timeline_columns(result: SimulationResult) -> dict[str, list[Any]]:
 
 def _numbers(values: np.ndarray) -> list[float | None]:
     """A column of floats with None (an empty cell) for NaN: not computed on a rest step."""
-    return [None if math.isnan(v) else v for v in values.tolist()]
+    column: list[float | None] = values.tolist()
+    for k in np.flatnonzero(np.isnan(values)).tolist():
+        column[k] = None
+    return column
 
 
 def event_columns(result: SimulationResult) -> dict[str, list[Any]]:
