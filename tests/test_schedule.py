@@ -181,17 +181,6 @@ def test_the_duty_cycle_is_bracketed_to_its_relative_precision() -> None:
         duty_cycle(problem, 60.0, precision=0.0)
 
 
-@pytest.mark.parametrize(
-    ("text", "seconds"), [("600", 600.0), ("600s", 600.0), ("30min", 1800.0), ("8h", 28800.0)]
-)
-def test_a_horizon_takes_a_unit(text: str, seconds: float) -> None:
-    from casadi_posture.cli.schedule import duration_s
-
-    assert duration_s(text, "--horizon", None) == seconds
-    with pytest.raises(ProblemError, match="--horizon"):
-        duration_s("8 hours", "--horizon", None)
-
-
 def test_duty_cycle_continuous_and_none() -> None:
     light = load_problem(HORIZONTAL, {"loads[0].mass_kg": 0.0})
     assert duty_cycle(light, 30.0, horizon_s=300.0).verdict == "continuous"

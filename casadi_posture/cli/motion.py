@@ -20,6 +20,7 @@ from casadi_posture.cli.common import (
     out_option,
     problem_from,
 )
+from casadi_posture.cli.durations import TIME
 from casadi_posture.cli.runs import echo_files, report_recording, write_run
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
@@ -51,19 +52,20 @@ from casadi_posture.static import law
 @click.option(
     "--between",
     "between_s",
-    type=(float, float),
+    type=(TIME, TIME),
     default=None,
     metavar="START END",
-    help="Only the frames from START to END s of the recording (the file's time; a static "
-    "calibration window may lie outside) [default: all of them].",
+    help="Only the frames from START to END of the recording, times such as 12.5 or 2min "
+    "(the file's time; a static calibration window may lie outside) [default: all of them].",
 )
 @click.option(
     "--resample",
     "resample_s",
-    type=float,
+    type=TIME,
     default=None,
-    help="Resample the recording every this many s (linear between frames) [default: the "
-    "file's own frames].",
+    metavar="TIME",
+    help="Resample the recording every this time, e.g. 0.1 or 0.1s (linear between frames) "
+    "[default: the file's own frames].",
 )
 @click.option(
     "--repeat",
@@ -75,9 +77,10 @@ from casadi_posture.static import law
 @click.option(
     "--until",
     "until_s",
-    type=float,
+    type=TIME,
     default=None,
-    help="Play the recording as a work cycle until this many s.",
+    metavar="TIME",
+    help="Play the recording as a work cycle until this time, e.g. 3600 or 1h.",
 )
 @out_option("out/evaluate/<problem>-<motion>")
 @click.option(

@@ -30,6 +30,7 @@ from casadi_posture.cli.common import (
     problem_from,
     shown_groups,
 )
+from casadi_posture.cli.durations import TIME
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.low_back import run_lines as low_back_lines
 from casadi_posture.output.movie_formats import WRITERS, check_format
@@ -59,7 +60,13 @@ from casadi_posture.static import law
     default=None,
     help="Minimum acceptable active-torque decrease ratio R_min (0-1).",
 )
-@click.option("--duration", type=float, default=None, help="Simulated time in s.")
+@click.option(
+    "--duration",
+    type=TIME,
+    default=None,
+    metavar="TIME",
+    help="Simulated time, a time: 600, 10min, 2h [default: the file's simulation.duration_s].",
+)
 @out_option("out/simulate/<problem>-<strategy>-<solver>")
 @click.option(
     "--animate",

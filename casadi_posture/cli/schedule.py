@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import click
@@ -17,6 +16,7 @@ from casadi_posture.cli.common import (
     main,
     problem_from,
 )
+from casadi_posture.cli.durations import TIME, TIMES
 from casadi_posture.errors import ProblemError
 from casadi_posture.output.report import table
 from casadi_posture.runs.duty_cycle import (
@@ -29,20 +29,14 @@ from casadi_posture.runs.duty_cycle import (
 )
 
 
-def _seconds_list(text: str, problem: str) -> list[float]:
-    """``--t-off 30`` or ``--t-off 0,30,60`` as rest times [s], each finite and ≥ 0."""
-    values = []
-    for part in text.split(","):
-        try:
-            value = float(part)
-        except ValueError:
-            raise ProblemError(
-                problem, "--t-off", text, "seconds ≥ 0, or a list: 0,30,60"
-            ) from None
-        values.append(check_seconds(value, "--t-off", problem, positive=False))
+def _rests(values: tuple[float, ...], problem: str) -> list[float]:
+    """``--t-off`` as rest times [s], each ≥ 0 and given once."""
+    for value in values:
+        check_seconds(value, "--t-off", problem, positive=False)
     if len(set(values)) != len(values):
-        raise ProblemError(problem, "--t-off", text, "each rest time once")
-    return values
+        shown = ",".join(f"{v:g}" for v in values)
+        raise ProblemError(problem, "--t-off", shown, "each rest time once")
+    return list(values)
 
 
 @main.command("duty-cycle")
@@ -50,23 +44,27 @@ def _seconds_list(text: str, problem: str) -> list[float]:
 @click.option(
     "--t-off",
     "t_off",
+    type=TIMES,
     required=True,
-    metavar="SECONDS[,SECONDS...]",
-    help="Rest per cycle in s (the load put down); a list, e.g. 0,30,60, tabulates the "
-    "sustainable hold against the rest.",
+    metavar="TIME[,TIME...]",
+    help="Rest per cycle (the load put down), a time: 30, 30s, 2min; a list, e.g. 0,30,1min, "
+    "tabulates the sustainable hold against the rest.",
 )
 @click.option(
     "--horizon",
+    type=TIME,
     default=None,
-    metavar="DURATION",
+    metavar="TIME",
     help="Simulated time over which the threshold must not be reached, in s or with a "
     "unit: 1800, 30min, 8h [default: the file's simulation.duration_s].",
 )
 @click.option(
     "--tolerance",
-    type=float,
+    type=TIME,
     default=None,
-    help="Width in s of the bracket the bisection stops at [default: 5 s, at least one time step].",
+    metavar="TIME",
+    help="Width (a time) of the bracket the bisection stops at [default: 5 s, at least one "
+    "time step].",
 )
 @click.option(
     "--precision",
@@ -88,8 +86,8 @@ def _seconds_list(text: str, problem: str) -> list[float]:
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of tables.")
 def duty_cycle(
     problem: str,
-    t_off: str,
-    horizon: str | None,
+    t_off: tuple[float, ...],
+    horizon: float | None,
     tolerance: float | None,
     precision: float,
     solver: str | None,
@@ -116,9 +114,8 @@ def duty_cycle(
       casadi-posture duty-cycle problems/holding_horizontal.toml --t-off 0,15,30,60,120 \\
           --horizon 1800 --out out/duty-cycle
     """
-    rests = _seconds_list(t_off, problem)
-    horizon_s = None if horizon is None else duration_s(horizon, "--horizon", problem)
-    for key, value in (("--horizon", horizon_s), ("--tolerance", tolerance)):
+    rests = _rests(t_off, problem)
+    for key, value in (("--horizon", horizon), ("--tolerance", tolerance)):
         if value is not None:
             check_seconds(value, key, problem, positive=True)
     with interrupt.deferred():
@@ -129,7 +126,7 @@ def duty_cycle(
         cycles = duty_cycles(
             resolved,
             rests,
-            horizon_s=horizon_s,
+            horizon_s=horizon,
             tolerance_s=tolerance,
             precision=precision,
             solver=solver,
@@ -256,17 +253,6 @@ def _duty_line(cycle: DutyCycle) -> str:
             "simulation.time_step_s narrows it"
         )
     return line
-
-
-def duration_s(text: str, key: str, path: object) -> float:
-    """A duration given as seconds or with a unit (``600``, ``600s``, ``30min``, ``8h``)
-    in s; anything else is a one-line error naming ``key``."""
-    units = {"h": 3600.0, "min": 60.0, "s": 1.0, "": 1.0}
-    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(h|min|s)?\s*", text)
-    if match is None:
-        expected = "a duration in s, or with a unit: 1800, 30min, 8h"
-        raise ProblemError(path, key, text, expected)
-    return float(match.group(1)) * units[match.group(2) or ""]
 
 
 def _or_dash(value: float | None) -> str:
