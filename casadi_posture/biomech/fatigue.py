@@ -31,6 +31,11 @@ class FatigueModel(Protocol):
 
     name: str
 
+    @property
+    def endurance_model(self) -> str:
+        """The name of the model behind ``endurance_time_s``."""
+        ...
+
     def initial_state(self) -> np.ndarray:
         """The rested state, shape (n,) or (n, k)."""
         ...
@@ -196,6 +201,11 @@ class HoldingTimeFatigue:
             return seconds
         decay = value(_region_rates([region], "recovery_rate")[region])
         return -ca.log1p(-seconds * decay) / decay
+
+    @property
+    def endurance_model(self) -> str:
+        """The endurance model behind ``endurance_time_s``."""
+        return self.endurance.name
 
     def rule(self) -> str:
         """The law, its endurance model and ``T_0``."""
@@ -387,6 +397,12 @@ class ThreeCompartmentFatigue:
     def endurance_expression(self, load_pct_mvc: ca.SX, region: str, value: Value) -> None:
         """None: the 3CC time to failure is found by time stepping (``endurance_time_s``)."""
         return None
+
+    @property
+    def endurance_model(self) -> str:
+        """Its own: the 3CC time to failure (``endurance_time_s``), whatever
+        ``fatigue.endurance`` says."""
+        return self.name
 
     def rule(self) -> str:
         """``3cc_r`` and its sustainable loads."""

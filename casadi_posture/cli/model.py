@@ -218,7 +218,7 @@ def torques(
         emit_json(
             {
                 "problem": problem,
-                "endurance_model": resolved.fatigue.endurance.name,
+                "endurance_model": resolved.fatigue.endurance_model,
                 "recovery_law": resolved.fatigue.name,
                 "endurance_rule": answer.rule,
                 "feasible": answer.feasible,

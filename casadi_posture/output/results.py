@@ -96,7 +96,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "strategy": settings.strategy,
         "r_min": settings.r_min,
         "recovery_law": problem.fatigue.settings(),
-        "endurance_model": problem.fatigue.endurance.name,
+        "endurance_model": problem.fatigue.endurance_model,
         "endurance_rule": rule(problem),
         "stop": result.stop,
         "duration_s": result.duration_s,
