@@ -12,6 +12,7 @@ problem (it has it), and forks the workers. A 20-minute hold of the 29-DOF body 
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import functools
 import gc
@@ -348,6 +349,8 @@ def _inherited_job(k: int) -> object:
 
 def _write_received(run: bytes, spec: tuple, workers: int) -> list[list[Path] | str]:
     """In the ``Writers`` process: the run's files, by ``workers`` processes it forks."""
+    if _NOT_READY is not None:
+        raise _NOT_READY
     received, scores, back = pickle.loads(run)
     result = replace(received, problem=_PROBLEM)
     step_scores.remember(result, scores)
@@ -372,15 +375,29 @@ PR_SET_PDEATHSIG = 1
 
 
 def _ready(draws: bool) -> None:
-    """The ``Writers`` process: Ctrl-C ignored; the Parquet writer and, with ``draws``,
-    the drawing modules imported (with the garbage collector off, then frozen, as the
-    command's entry point does)."""
+    """The ``Writers`` process: Ctrl-C ignored; the Parquet writer (where the ``parquet``
+    extra is installed) and, with ``draws``, the drawing modules imported (with the garbage
+    collector off, then frozen, as the command's entry point does). An import that fails
+    is kept (``_NOT_READY``) and raised when the run arrives: a pool whose initializer
+    raises is only "broken", which would hide the real exception."""
+    global _NOT_READY
     interrupt.ignore_in_worker()
     gc.disable()
-    import casadi_posture.output.arrow_columns
+    try:
+        _import_writers(draws)
+    except Exception as error:
+        _NOT_READY = error
+    gc.freeze()
+    gc.enable()
 
+
+def _import_writers(draws: bool) -> None:
+    with contextlib.suppress(ImportError):  # no pyarrow: no timeline.parquet (write_results)
+        import casadi_posture.output.arrow_columns
     if draws:
         import casadi_posture.output.html_report
         import casadi_posture.output.plots  # noqa: F401
-    gc.freeze()
-    gc.enable()
+
+
+#: Why the ``Writers`` process could not import what it writes with (``_ready``).
+_NOT_READY: Exception | None = None
