@@ -306,3 +306,18 @@ def test_the_share_for_whom_a_schedule_is_sustainable(tmp_path) -> None:
         assert f"{people} {len(never)} of 3," in result.output
         counts.append(len(never))
     assert 0 < sum(counts) < 6, "the load must split the workers for the test to bite"
+
+
+def test_a_population_with_a_flagged_worker_exits_1_as_batch_and_whatif_do(tmp_path) -> None:
+    """30 kg at arm's length is over every worker's strength at the start: every row of
+    summary.csv is flagged, the console says so per sex, and the command exits 1 (it exited
+    0 with 6 of 6 workers flagged); the unflagged run above exits 0."""
+    import csv
+
+    result, out = _population(tmp_path, "--set", "loads[0].mass_kg=30")
+    rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert {r["status"] for r in rows} == {"flagged"}
+    assert all("over strength" in r["flags"] for r in rows)
+    assert result.exit_code == 1, result.output
+    for people in ("men", "women"):
+        assert f"FLAGGED: {people}: 3 of 3 worker(s) flagged" in result.output

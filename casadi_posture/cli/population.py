@@ -79,8 +79,8 @@ def population(
     intervals, and the share for whom it is sustainable (on the file's [schedule], if any:
     no group ever at the fatigue threshold). Writes summary.csv (a row per worker),
     population.json, survival.png and held_vs_stature.png; resumable like batch. Exit
-    code 1 when a worker's run failed, 2 on bad input, 130 on Ctrl-C (finished workers
-    are kept; rerun with --resume).
+    code 1 when a worker's run is flagged (over strength at the start, say) or failed, 2 on
+    bad input, 130 on Ctrl-C (finished workers are kept; rerun with --resume).
 
     \b
     Example:
@@ -138,7 +138,10 @@ def population(
         gave_out = ", ".join(f"{k} {v}" for k, v in sorted(sex["exhausted_region"].items()))
         click.echo(f"{sex['people']}: the region that gave out: {gave_out}")
         if sex["flagged"]:
-            click.echo(f"{sex['people']}: {sex['flagged']} worker(s) flagged (summary.csv)")
+            click.echo(
+                f"FLAGGED: {sex['people']}: {sex['flagged']} of {sex['drawn']} worker(s) "
+                "flagged (why: summary.csv, column flags)"
+            )
         if sex["failed"]:
             click.echo(f"{sex['people']}: {sex['failed']} worker(s) failed (summary.csv)")
     if report.summary["groups_not_varied"]:
@@ -154,5 +157,5 @@ def population(
             err=True,
         )
         raise SystemExit(INTERRUPTED)
-    if batch.failed:
+    if batch.with_status("flagged", "failed"):
         raise SystemExit(1)
