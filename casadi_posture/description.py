@@ -27,7 +27,7 @@ def description(problem: Problem) -> dict[str, Any]:
     spec = problem.spec
     return {
         "problem": str(problem.path),
-        "title": spec.title,
+        "title": problem.heading,
         "model": body.name,
         "sex": spec.body.sex,
         "stature_m": spec.body.stature_m,

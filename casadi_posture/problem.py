@@ -45,7 +45,7 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import Task as IKTask
 from casadi_posture.ik.tasks import tasks_from_specs
-from casadi_posture.spec.overrides import apply
+from casadi_posture.spec.overrides import apply, changes
 from casadi_posture.spec.schema import (
     ComfortTask,
     ComTask,
@@ -96,6 +96,17 @@ class Problem:
     @property
     def tasks(self) -> list[Task]:
         return list(self.spec.tasks)
+
+    @property
+    def heading(self) -> str:
+        """The file's ``title`` for titles and headers, saying what the overrides changed
+        (``--set``, a what-if case) since the title was written: ``My shelf: a 4 kg box ...
+        (changed: loads[0].mass_kg = 6)``; a ``title`` set by an override stands as given;
+        empty without a title."""
+        title = self.spec.title
+        if not title or not self.overrides or "title" in self.overrides:
+            return title
+        return f"{title} (changed: {changes(self.overrides, most=MOST_CHANGES)})"
 
     def hierarchy(self) -> TaskHierarchy:
         """The problem's tasks grouped into priority levels (built once per call)."""
@@ -193,6 +204,10 @@ def problem_from_data(
         raise
     return replace(problem, data=raw, overrides=dict(overrides or {}))
 
+
+#: Overrides a title names (``Problem.heading``); the page's subtitle and the manifest
+#: hold them all.
+MOST_CHANGES = 4
 
 #: Tables and arrays nested deeper than this are refused before validation.
 MAX_NESTING = 16

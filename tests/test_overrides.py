@@ -54,3 +54,45 @@ def test_overridden_problems_are_validated_like_files() -> None:
         load_problem(PROBLEMS / "holding_m45.toml", {"loads[0].mass_kg": -1.0})
     with pytest.raises(ProblemError, match="an index of an existing list item"):
         load_problem(PROBLEMS / "holding_m45.toml", {"loads[3].mass_kg": 1.0})
+
+
+def test_a_title_says_what_the_overrides_changed(tmp_path) -> None:
+    """The shelf template's title names a 4 kg box 1.20 m high: with the box set to 6 kg the
+    title says so, in describe's header and in solve's report.html; without overrides,
+    or with the title itself set, the title stands as written."""
+    from click.testing import CliRunner
+
+    from casadi_posture.cli import main
+
+    shelf = tmp_path / "shelf.toml"
+    assert CliRunner().invoke(main, ["init", "shelf", str(shelf)]).exit_code == 0
+    written = load_problem(shelf).spec.title
+    assert "4 kg box" in written and load_problem(shelf).heading == written
+    mass = {"loads[0].mass_kg": 6.0, "loads[1].mass_kg": 6.0}
+    assert load_problem(shelf, mass).heading == (
+        f"{written} (changed: loads[0].mass_kg = 6, loads[1].mass_kg = 6)"
+    )
+    mine = mass | {"title": "A 6 kg box"}
+    assert load_problem(shelf, mine).heading == "A 6 kg box"
+    many = {
+        "loads[0].mass_kg": 6.0,
+        "fatigue.strategy": "passive",
+        "fatigue.r_min": 0.8,
+        "fatigue.fatigue_threshold": 0.7,
+        "fatigue.recovery_threshold": 0.4,
+        "solver.name": "nullspace",
+    }
+    assert load_problem(shelf, many).heading.endswith(
+        "(changed: loads[0].mass_kg = 6, fatigue.strategy = passive, fatigue.r_min = 0.8, "
+        "fatigue.fatigue_threshold = 0.7, and 2 more)"
+    )
+    hold = str(PROBLEMS / "holding_m45.toml")
+    sets = ["--set", "loads[0].mass_kg=6"]
+    described = CliRunner().invoke(main, ["describe", hold, *sets])
+    title = load_problem(hold).spec.title
+    assert described.output.splitlines()[0] == (f"{hold}: {title} (changed: loads[0].mass_kg = 6)")
+    out = tmp_path / "solve"
+    solved = CliRunner().invoke(main, ["solve", hold, *sets, "--out", str(out)])
+    assert solved.exit_code in (0, 1), solved.output
+    page = (out / "report.html").read_text()
+    assert f"<h1>{title} (changed: loads[0].mass_kg = 6)</h1>" in page

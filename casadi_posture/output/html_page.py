@@ -18,6 +18,7 @@ from typing import Any
 
 from casadi_posture.output.plotly_json import plotly_js, version
 from casadi_posture.problem import Problem
+from casadi_posture.spec.overrides import changes
 
 
 @cache
@@ -90,7 +91,7 @@ def write_page(text: str, path: Path) -> Path:
 
 def problem_line(problem: Problem) -> str:
     """The problem file and the keys set on the command line, for a page's subtitle."""
-    sets = ", ".join(f"{k} = {v}" for k, v in problem.overrides.items())
+    sets = changes(problem.overrides)
     return f"{problem.path} with {sets}" if sets else str(problem.path)
 
 

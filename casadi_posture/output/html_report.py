@@ -290,7 +290,7 @@ def report_html(result: SimulationResult) -> str:
         "cursor": cursor_axes,
         **moves,
     }
-    heading = html.escape(result.problem.spec.title or title(result))
+    heading = html.escape(result.problem.heading or title(result))
     return PAGE.format(
         title=heading,
         subtitle=html.escape(

@@ -218,7 +218,7 @@ def page_html(heading: str, subtitle: str, cases: Sequence[Case], index: str = "
 def solve_page(answer: StaticAnswer) -> str:
     """report.html of ``solve``."""
     problem = answer.problem
-    heading = problem.spec.title or problem.path.stem
+    heading = problem.heading or problem.path.stem
     return page_html(heading, f"{problem_line(problem)} · solve", [solve_case(answer)])
 
 

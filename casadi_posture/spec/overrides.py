@@ -97,3 +97,16 @@ def apply(raw: dict[str, Any], overrides: Mapping[str, Any], path: Path | None) 
                 node.pop(other, None)
         node[last] = value
     return out
+
+
+def changes(overrides: Mapping[str, Any], most: int | None = None) -> str:
+    """Dotted-key overrides in words, ``loads[0].mass_kg = 6, fatigue.strategy = passive``
+    (numbers to 6 significant digits); with ``most``, the first ``most`` of them and
+    ``and N more``; empty without overrides."""
+    shown = [
+        f"{key} = {value:g}" if isinstance(value, float) else f"{key} = {value}"
+        for key, value in overrides.items()
+    ]
+    if most is not None and len(shown) > most:
+        shown = [*shown[:most], f"and {len(shown) - most} more"]
+    return ", ".join(shown)
