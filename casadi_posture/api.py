@@ -346,9 +346,12 @@ def write_solve(
     return [path, write_solve_page(answer, out / "report.html")]
 
 
-def compare(problem: Problem) -> comparison.Comparison:
-    """Both IK solvers from the same start, and a verdict on whether they agree."""
-    return comparison.compare(problem)
+def compare(problem: Problem, starts: int = 0, seed: int = 0) -> comparison.Comparison:
+    """Both IK solvers from the same start, and a verdict on whether they agree (an answer
+    both share that misses a level: a local minimum, or a target out of reach, and on which
+    evidence); with ``starts``, also from that many random starts within the joint limits
+    (seeded by ``seed``), summed up in ``.starts``."""
+    return comparison.compare(problem, starts, seed)
 
 
 def write_compare(

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from casadi_posture import api
 from casadi_posture.cli.common import (
@@ -24,7 +25,7 @@ from casadi_posture.output import low_back
 from casadi_posture.output.answer import answer_json
 from casadi_posture.output.report import table
 from casadi_posture.output.scores import lines
-from casadi_posture.runs.compare import rows
+from casadi_posture.runs.compare import MAX_STARTS, Starts, rows
 
 NO_REPORT_OPTION = no_report_option(
     "one page for a browser: the postures in 3-D, the summary, the loads and the tables"
@@ -125,30 +126,56 @@ def solve(
     default=None,
     help="Folder for compare.csv and report.html.",
 )
+@click.option(
+    "--starts",
+    type=click.IntRange(1, MAX_STARTS),
+    default=None,
+    help=f"Also solve from this many random starts within the joint limits (1 to {MAX_STARTS}) "
+    "and count how many agree, reach the task, stop at a local minimum or differ.",
+)
+@click.option(
+    "--seed",
+    type=click.IntRange(min=0),
+    default=0,
+    show_default=True,
+    help="Seed of the random starts (the same seed, the same starts).",
+)
 @NO_REPORT_OPTION
 @SET_OPTION
 @FORCE_OPTION
 def compare_command(
     problems: tuple[str, ...],
     out: Path | None,
+    starts: int | None,
+    seed: int,
     no_report: bool,
     sets: tuple[str, ...],
     force: bool,
 ) -> None:
     """Solve each problem with both IK solvers from the same start and compare them:
     residual per level, largest joint difference, wall time, status, and a verdict
-    that says why they disagree (an unreachable target, two posture families).
+    that says why they disagree (two posture families, one stopping short of a level).
+    When both miss a level, the verdict says whether they share a local minimum (another
+    start reaches the level; the joints they hold at a limit) or the level is out of reach,
+    and on which evidence: the chain's reach, or no random start reaching it.
+
+    With --starts N, both solvers also solve from N starts drawn uniformly within the
+    joint limits (--seed): per problem, how many starts agree, reach the task, stop at a
+    local minimum or at a target out of reach, how many differ, and the worst
+    disagreement.
 
     With --out, writes compare.csv and report.html (one page that opens offline in a
     browser: a row per problem; a click on it shows the start and both solvers' postures
     in 3-D, the verdict and the tables; not with --no-report).
 
     Problems without tasks are skipped. Exits with code 1 when any problem disagrees, a
-    solver fails, or level 1 is not achieved (residual above 0.0001 m or rad).
+    solver fails, or level 1 is not achieved (residual above 0.0001 m or rad), from the
+    file's start or, with --starts, the solvers differ from a random start.
 
     \b
     Example:
       casadi-posture compare problems/*.toml --out out/compare
+      casadi-posture compare problems/holding_*.toml --starts 20
     """
     if out is not None:
         api.check_out(out, force=force)
@@ -159,7 +186,7 @@ def compare_command(
         if not resolved.tasks:
             click.echo(f"skipped {path}: no tasks")
             continue
-        comparison = api.compare(resolved)
+        comparison = api.compare(resolved, starts or 0, seed)
         flags = []
         if not comparison.agree:
             flags.append(f"the solvers disagree: {comparison.verdict}")
@@ -168,6 +195,11 @@ def compare_command(
         ]
         if unreached:
             flags.append(f"level 1 not achieved by {' and '.join(unreached)}")
+        if comparison.starts is not None and comparison.starts.differ:
+            flags.append(
+                f"the solvers differ from {comparison.starts.differ} of "
+                f"{comparison.starts.count} random starts"
+            )
         flagged += [f"{path}: {flag}" for flag in flags]
         compared.append((resolved, comparison, flags))
         table_rows += rows(comparison)
@@ -204,6 +236,9 @@ def compare_command(
             digits=2,
         )
     )
+    for _, comparison, _ in compared:
+        if comparison.starts is not None:
+            echo_starts(comparison.problem, comparison.starts)
     if out is not None:
         written = api.write_compare(compared, out, report=not no_report, force=True)
         click.echo("\n" + "\n".join(f"written: {path}" for path in written))
@@ -211,3 +246,20 @@ def compare_command(
         click.echo(f"FLAGGED: {line}")
     if flagged:
         raise SystemExit(1)
+
+
+#: The differing random starts ``compare --starts`` prints per problem.
+SHOWN_DIFFERENCES = 5
+
+
+def echo_starts(problem: str, starts: Starts) -> None:
+    """A problem's random starts in one line, then the first differing ones (their number in
+    the seeded draw, from 1, their angles [deg] on a small body, their verdict)."""
+    click.echo(f"\n{problem}: {starts.line()}")
+    differing = [(i, c) for i, c in enumerate(starts.comparisons, 1) if not c.agree]
+    for i, c in differing[:SHOWN_DIFFERENCES]:
+        angles = ", ".join(f"{a:.1f}" for a in np.degrees(c.start)) if c.start.size <= 3 else ""
+        at = f" ({angles} deg)" if angles else ""
+        click.echo(f"  start {i}{at}: {c.verdict}")
+    if len(differing) > SHOWN_DIFFERENCES:
+        click.echo(f"  ... and {len(differing) - SHOWN_DIFFERENCES} more differing starts")

@@ -13,7 +13,7 @@ import numpy as np
 from casadi_posture.output.html_page import table, write_page
 from casadi_posture.output.posture_page import Case, page_html, section
 from casadi_posture.problem import Problem
-from casadi_posture.runs.compare import Comparison
+from casadi_posture.runs.compare import Comparison, Starts
 from casadi_posture.static import level_outcome
 
 
@@ -22,6 +22,8 @@ def compare_case(problem: Problem, comparison: Comparison, flags: Sequence[str])
     verdict, the levels side by side and the DOFs by their difference."""
     ns, lx = comparison.nullspace, comparison.lexicographic
     lines = [f"verdict: {comparison.verdict}"]
+    if comparison.starts is not None:
+        lines.append(comparison.starts.line())
     lines.append(f"largest joint difference: {comparison.max_joint_difference_deg:.3g} deg")
     lines += [
         f"{r.solver}: {r.status}, {r.iterations} iterations, {1e3 * r.wall_time_s:.1f} ms"
@@ -56,6 +58,20 @@ def compare_case(problem: Problem, comparison: Comparison, flags: Sequence[str])
     )
 
 
+#: The index's columns of the random starts (``compare --starts``).
+STARTS_HEADERS = ["random starts", "agree", "reach the task", "local minimum", "unreachable",
+                  "differ", "worst joint diff (deg)", "worst residual gap"]  # fmt: skip
+
+
+def _starts_cells(starts: Starts | None) -> list[object]:
+    """A problem's cells under ``STARTS_HEADERS`` (blank without random starts)."""
+    if starts is None:
+        return [""] * len(STARTS_HEADERS)
+    return [starts.count, starts.agree, starts.reached, starts.local_minimum, starts.unreachable,
+            starts.differ, starts.worst_joint_difference_deg,
+            f"{starts.worst_residual_gap:.3g} {starts.worst_gap_unit}"]  # fmt: skip
+
+
 def compare_page(pairs: Sequence[tuple[Problem, Comparison, Sequence[str]]]) -> str:
     """report.html of ``compare``: a row per problem (a click shows it), then the chosen
     problem's postures, verdict and tables; ``pairs``: each problem, its comparison and
@@ -65,11 +81,13 @@ def compare_page(pairs: Sequence[tuple[Problem, Comparison, Sequence[str]]]) -> 
          1e3 * c.nullspace.wall_time_s, 1e3 * c.lexicographic.wall_time_s]
         for _, c, _ in pairs
     ]  # fmt: skip
-    index = table(
-        ["problem", "DOFs", "levels", "verdict", "max joint diff (deg)", "time nullspace (ms)",
-         "time lexicographic (ms)"],
-        rows, id="index", **{"class": "sortable"},
-    )  # fmt: skip
+    headers = ["problem", "DOFs", "levels", "verdict", "max joint diff (deg)",
+               "time nullspace (ms)", "time lexicographic (ms)"]  # fmt: skip
+    if any(c.starts is not None for _, c, _ in pairs):
+        headers += STARTS_HEADERS
+        for row, (_, c, _) in zip(rows, pairs, strict=True):
+            row += _starts_cells(c.starts)
+    index = table(headers, rows, id="index", **{"class": "sortable"})
     agree = sum(c.agree for _, c, _ in pairs)
     heading = f"Both IK solvers on {len(pairs)} problem(s): {agree} agree"
     cases = [compare_case(problem, c, flags) for problem, c, flags in pairs]
