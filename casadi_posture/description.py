@@ -28,6 +28,7 @@ def description(problem: Problem) -> dict[str, Any]:
     return {
         "problem": str(problem.path),
         "title": problem.heading,
+        "notes": list(problem.notes),
         "model": body.name,
         "sex": spec.body.sex,
         "stature_m": spec.body.stature_m,

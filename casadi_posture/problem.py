@@ -62,6 +62,7 @@ from casadi_posture.spec.schema import (
     TreeSpec,
     passive_model_tag,
 )
+from casadi_posture.spec.slips import problem_notes, radians_note
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,7 @@ class Problem:
     included), its torque model inputs, the posture [rad], settings and the fatigue model
     (stateless: one state per simulation); ``data`` is what it was read
     from (the file's tables with the ``overrides`` applied), ``text_sha256`` the SHA-256 of
-    the file's text when it came from one."""
+    the file's text when it came from one, ``notes`` the slips it may hold (spec/slips.py)."""
 
     path: Path
     spec: ProblemSpec
@@ -85,6 +86,7 @@ class Problem:
     data: dict[str, Any] = field(default_factory=dict)
     overrides: dict[str, Any] = field(default_factory=dict)
     text_sha256: str | None = None
+    notes: tuple[str, ...] = ()
 
     def __repr__(self) -> str:
         changed = f", overrides={self.overrides}" if self.overrides else ""
@@ -139,7 +141,8 @@ class Problem:
                 _degrees(angle, key, name, self.path)
             )
         _check_posture(self.body, q, key, self.path)
-        return replace(self, posture=q)
+        note = radians_note(degrees, key, self.path)
+        return replace(self, posture=q, notes=self.notes if note is None else (*self.notes, note))
 
 
 def read_problem_text(path: str | Path) -> str:
@@ -202,7 +205,8 @@ def problem_from_data(
         if error.file is None:
             raise ProblemError(path, error.key, error.value, error.expected) from None
         raise
-    return replace(problem, data=raw, overrides=dict(overrides or {}))
+    notes = problem_notes(spec, path)
+    return replace(problem, data=raw, overrides=dict(overrides or {}), notes=notes)
 
 
 #: Overrides a title names (``Problem.heading``); the page's subtitle and the manifest

@@ -16,7 +16,7 @@ from conftest import PROBLEMS
 from casadi_posture.cli import main
 from casadi_posture.ergonomics.mirror import asymmetry, lateral, paired, symmetric
 from casadi_posture.problem import load_problem, problem_from_data
-from casadi_posture.static import plausibility
+from casadi_posture.static import plausibility, solve
 
 SHELF = PROBLEMS / "standing_shelf_box.toml"
 WALL = PROBLEMS / "standing_wall_horizontal.toml"
@@ -141,3 +141,44 @@ def test_torques_reports_and_flags_a_seated_trunk_leaning_back() -> None:
     assert solved.exit_code == 0, solved.output
     shelf = CliRunner().invoke(main, ["solve", str(SHELF), "--json"])
     assert json.loads(shelf.stdout)["plausibility"]["asymmetry_deg"] < 1.0
+
+
+def test_crossed_forearms_are_measured_across_the_trunk_and_flagged() -> None:
+    """Standing, elbows bent 90° and both shoulders rotated 70° inwards: each grip lies
+    0.108 m past the mid-line (world positions, the trunk upright), 0.215 m crossed. With
+    the trunk turned 30° the world's y no longer measures it (0.186 m), the trunk's frame
+    does (0.22 m still). 20° of rotation leaves the hands apart: no flag."""
+    shelf = load_problem(SHELF)
+    body, check = shelf.body, plausibility(shelf)
+    grips = ca.Function("grips", [body.q], [ca.horzcat(*map(body.landmark, ("grip_r", "grip_l")))])
+
+    def posture(rotation: float, trunk: float = 0.0) -> np.ndarray:
+        q = np.zeros(body.n)
+        angles = {"elbow_flexion_r": 90, "elbow_flexion_l": 90, "lumbar_rotation": trunk}
+        angles |= {"shoulder_rotation_r": rotation, "shoulder_rotation_l": rotation}
+        for name, degrees in angles.items():
+            q[body.index[name]] = math.radians(degrees)
+        return q
+
+    crossed = posture(70.0)
+    right, left = np.asarray(grips(crossed)).T
+    assert right[1] - left[1] == pytest.approx(0.215, abs=5e-4)
+    flags = [f for f in check.check(crossed, "posture").flags if "forearms cross" in f]
+    assert flags == [
+        f"posture: the forearms cross (grip_l {right[1] - left[1]:.2f} m to the right of "
+        "grip_r across the trunk, > 0.02 m): the hands' targets swapped?"
+    ]
+    turned = posture(70.0, trunk=30.0)
+    right, left = np.asarray(grips(turned)).T
+    assert right[1] - left[1] == pytest.approx(0.186, abs=5e-4)
+    assert any("(grip_l 0.22 m to the right" in f for f in check.check(turned, "end").flags)
+    assert not any("forearms" in f for f in check.check(posture(20.0), "start").flags)
+
+
+def test_the_shelf_solved_with_its_targets_swapped_is_flagged_and_as_shipped_is_not() -> None:
+    swapped = {"tasks[2].target_m": [0.62, 0.15, 1.40], "tasks[3].target_m": [0.62, -0.15, 1.40]}
+    crossed = solve(load_problem(SHELF, swapped), "lexicographic")
+    assert any("the forearms cross" in f for f in crossed.plausibility.flags)
+    assert any("the forearms cross" in f for f in crossed.flags)
+    shipped = solve(load_problem(SHELF), "lexicographic")
+    assert not any("forearms" in f for f in shipped.flags)

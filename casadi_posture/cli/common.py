@@ -113,11 +113,21 @@ def problem_from(
     sets: tuple[str, ...] = (),
 ) -> Problem:
     """The problem file with ``--set`` overrides (then the command's own ones) and
-    ``--posture`` angles applied, validated like the file."""
+    ``--posture`` angles applied, validated like the file; its notes printed."""
     problem = load_problem(path, parse_sets(sets, path) | (overrides or {}))
     if postures:
         problem = problem.with_posture(parse_postures(postures, path))
+    echo_notes(problem)
     return problem
+
+
+def echo_notes(problem: Problem) -> None:
+    """The slips a problem may hold (spec/slips.py) as ``note:`` lines: on stdout, or on
+    stderr under ``--json``, whose stdout is the JSON alone (which carries them too)."""
+    context = click.get_current_context(silent=True)
+    as_json = context is not None and bool(context.params.get("as_json"))
+    for note in problem.notes:
+        click.echo(f"note: {note}", err=as_json)
 
 
 def parse_postures(items: tuple[str, ...], path: str | None = None) -> dict[str, float]:

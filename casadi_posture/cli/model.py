@@ -223,6 +223,7 @@ def torques(
                 "endurance_rule": answer.rule,
                 "feasible": answer.feasible,
                 "flags": list(answer.flags),
+                "notes": list(answer.problem.notes),
                 "dofs": answer.dofs(),
                 "half_joints": answer.half_joints(),
                 "capable": answer.capable_report(),

@@ -748,6 +748,9 @@ def whatif(
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
         click.echo(f"recovery law: {law(problem_from(problem))}\n")
     click.echo(table(headers, rows, digits=2, right=right))
+    for row in sorted(report.rows, key=position):
+        if row.get("notes"):
+            click.echo(f"note: case {row['case']}: {row['notes']}")
     click.echo(f"\ntable: {out / 'whatif.csv'}; figures: {len(report.figures)} in {out}")
     _finish(report)
 

@@ -11,7 +11,7 @@ M R M with M = diag(1, -1, 1).
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 
@@ -45,6 +45,16 @@ def mirror_name(name: str | None) -> str | None:
         if name.endswith(side):
             return name[: -len(side)] + other
     return name
+
+
+def sided_pairs(names: Iterable[str]) -> list[tuple[str, str]]:
+    """(right, left) pairs among ``names``: each ``_r`` name whose mirror is there too."""
+    given = set(names)
+    return sorted(
+        (name, other)
+        for name in given
+        if name.endswith("_r") and (other := mirror_name(name)) in given and other is not None
+    )
 
 
 def paired(body: BodyModel) -> list[tuple[int, int]]:

@@ -17,7 +17,7 @@ import numpy as np
 from casadi_posture.body.loads import Load
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.data import parameters
-from casadi_posture.ergonomics.mirror import asymmetry, lateral, symmetric
+from casadi_posture.ergonomics.mirror import asymmetry, lateral, sided_pairs, symmetric
 from casadi_posture.ik.tasks import Gaze, Line, Orientation, Plane, Position, Task
 
 
@@ -129,6 +129,10 @@ class Plausibility:
         self.trunk_twist = lateral(body)
         self.trunk, self.flexion_sign = _trunk_pitch(body)
         self._ahead = _ahead_function(body, tuple(effectors), self.trunk)
+        self.hands = tuple(
+            sided_pairs(t.effector for t in tasks if isinstance(t, Position | Line | Plane))
+        )
+        self._crossing = _crossing_function(body, self.hands)
         self.lower, self.upper = body.lower, body.upper
         self.range = self.upper - self.lower
         self.near, self.at = _value("near_limit"), _value("at_limit")
@@ -209,6 +213,15 @@ class Plausibility:
                     f"{where}: the trunk leans back ({extension:.0f}° of lumbar extension) "
                     f"while a hand works {ahead:.2f} m ahead of it (REBA scores it)"
                 )
+        if self._crossing is not None:
+            limit = _value("crossed_hands")
+            crossing = np.asarray(self._crossing(q), dtype=float).ravel()
+            for (right, left), metres in zip(self.hands, crossing, strict=True):
+                if metres > limit:
+                    out.append(
+                        f"{where}: the forearms cross ({left} {metres:.2f} m to the right of "
+                        f"{right} across the trunk, > {limit:g} m): the hands' targets swapped?"
+                    )
         return out
 
     def held_at_limits(self, time_s: np.ndarray, q: np.ndarray) -> list[dict[str, Any]]:
@@ -259,6 +272,24 @@ def _ahead_function(
     centre = body.point(dof.name, dof.origin)
     ahead = [body.landmark(e)[0] - centre[0] for e in effectors]
     return ca.Function("ahead", [body.q], [ca.horzcat(*ahead)])
+
+
+@lru_cache(maxsize=32)
+def _crossing_function(body: BodyModel, hands: tuple[tuple[str, str], ...]) -> ca.Function | None:
+    """``crossing(q)``: per (right, left) pair of effectors, how far [m] the left one lies to
+    the right of the right one along the body's left: the y axis of the frame of the last
+    DOF that moves both (the trunk both arms hang from; the world's y for a body without
+    one), built once per body and pairs; None without pairs."""
+    if not hands:
+        return None
+    crossing = []
+    for right, left in hands:
+        chains = (body.ancestors(body.landmarks[e].dof) for e in (right, left))
+        shared = [a for a, b in zip(*chains, strict=False) if a == b]
+        frame = None if not shared else shared[-1]
+        leftward = body.rotation(frame) @ ca.DM([0.0, 1.0, 0.0])
+        crossing.append(ca.dot(body.landmark(right) - body.landmark(left), leftward))
+    return ca.Function("crossing", [body.q], [ca.horzcat(*crossing)])
 
 
 def _trunk_pitch(body: BodyModel) -> tuple[int | None, float]:

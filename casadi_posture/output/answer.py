@@ -23,6 +23,7 @@ def answer_json(answer: StaticAnswer, problem: str) -> dict[str, Any]:
         "success": result.success,
         "reached": answer.reached,
         "flags": list(answer.flags),
+        "notes": list(answer.problem.notes),
         "iterations": result.iterations,
         "wall_time_s": result.wall_time_s,
         "posture_deg": answer.posture_deg,

@@ -139,6 +139,7 @@ def summary(result: SimulationResult) -> dict[str, Any]:
         "rula_reba": run_report(result, step_scores(result)),
         "low_back": back,
         "flags": flags(result, plausible, back),
+        "notes": list(problem.notes),
         "solver_statistics": {
             "steps": int(tl.time.size),
             "steps_by_solver": dict(Counter(s for s in tl.solver if s)),

@@ -52,6 +52,7 @@ LEADING = (
     "case",
     "status",
     "flags",
+    "notes",
     "error",
     "problem",
     "solver",
@@ -186,6 +187,7 @@ def run_case(case: Case) -> Outcome:
             "r_min": problem.spec.fatigue.r_min,
             "recovery_law": problem.fatigue.name,
             "endurance_rule": rule(problem),
+            "notes": "; ".join(problem.notes),
         }
         if case.simulate and not problem.tasks:
             row |= {"status": "skipped", "flags": "", "error": "no tasks to hold"}
