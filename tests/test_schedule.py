@@ -189,12 +189,44 @@ def test_duty_cycle_continuous_and_none() -> None:
     assert heavy.duty_cycle_pct == 0.0 and len(heavy.trials) == 2
 
 
+def test_the_default_horizon_is_an_8_hour_shift() -> None:
+    """A file that simulates 150 s: the continuous hold reaches the threshold at 172 s, after
+    the file's duration, so that duration as the horizon called the task "sustainable
+    continuously". The default horizon is an 8-hour shift, stated with the answer: holds
+    up to 88 s with 30 s of rest stay below the threshold for 28800 s, 88/118 = 74.6 %."""
+    short = {"simulation.duration_s": 150.0}
+    plain = simulate(load_problem(HORIZONTAL, short | {"simulation.duration_s": 400.0}))
+    crossing = next(e for e in plain.events if e.kind == "fatigue_threshold")
+    assert crossing.time_s == 172.0 > short["simulation.duration_s"]
+    result = _run(
+        "duty-cycle", HORIZONTAL, "--t-off", "0.5min", "--set", "simulation.duration_s=150"
+    )
+    assert result.exit_code == 0, result.output
+    assert "rest 30 s per cycle, over an 8-h shift (28800 s)," in result.output
+    assert "continuously" not in result.output
+    assert (
+        "sustainable for an 8-h shift (28800 s): up to 88 s on per 118 s cycle (30 s of rest), "
+        f"a {100 * 88 / 118:.1f} % duty cycle\n"
+        f"not sustainable: 92 s on per 122 s cycle ({100 * 92 / 122:.1f} %) reaches the "
+        "threshold (shoulder_flexors at 702 s); the limit lies between the two\n"
+    ) in result.output
+
+
+def test_a_shift_in_more_steps_than_a_run_takes_is_refused_before_it_runs() -> None:
+    """8 h at 0.1 s steps is 288000 steps, more than the 100000 a run may take: the horizon
+    is refused, naming the limit, not a simulation.duration_s the user never wrote."""
+    fine = load_problem(HORIZONTAL, {"simulation.time_step_s": 0.1})
+    with pytest.raises(ProblemError, match=r"horizon_s = 28800.0: expected at most 100000 time"):
+        duty_cycle(fine, 30.0)
+
+
 def test_duty_cycle_command(tmp_path: Path) -> None:
     out = tmp_path / "d"
     args = ["--t-off", "0,30", "--horizon", "5min", "--tolerance", "10", "--out", out]
     result = _run("duty-cycle", HORIZONTAL, *args)
     assert result.exit_code == 0, result.output
-    assert "no duty cycle works" in result.output and "duty cycle: " in result.output
+    assert "no duty cycle works for 5 min (300 s): even 1 s on per 1 s cycle" in result.output
+    assert "sustainable for 5 min (300 s): up to " in result.output
     assert "simulations" in result.output and "s wall" in result.output
     written = {p.name for p in out.iterdir()}
     assert written == {

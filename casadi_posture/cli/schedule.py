@@ -24,6 +24,7 @@ from casadi_posture.runs.duty_cycle import (
     DutyCycle,
     check_seconds,
     duty_cycles,
+    span,
     table_columns,
     write_duty_cycles,
 )
@@ -145,7 +146,7 @@ def _report(cycles: list[DutyCycle], files: list[Path]) -> None:
     """The trials of each search and its answer in words; a table for several rests."""
     for cycle in cycles:
         click.echo(
-            f"{cycle.problem}: rest {cycle.rest_s:g} s per cycle, horizon {cycle.horizon_s:g} s, "
+            f"{cycle.problem}: rest {cycle.rest_s:g} s per cycle, over {span(cycle.horizon_s)}, "
             f"tolerance {cycle.tolerance_s:g} s and {100 * cycle.precision:g} % of the duty "
             f"cycle (time step {cycle.time_step_s:g} s); threshold: "
             f"a group's fatigue at {cycle.fatigue_threshold:g} (fatigue.fatigue_threshold)"
@@ -190,31 +191,28 @@ def answer_lines(cycle: DutyCycle) -> list[str]:
     rest, verdict = cycle.rest_s, cycle.verdict
     failing = next((t for t in cycle.trials if t.t_on_s == cycle.failing_t_on_s), None)
     where = f" ({failing.half_joint} at {failing.threshold_s:g} s)" if failing else ""
+    over = span(cycle.horizon_s)
     if verdict == "continuous":
         lines = [
-            f"sustainable continuously: the hold never reaches the threshold within "
-            f"{cycle.horizon_s:g} s (duty cycle 100 %)"
+            f"sustainable for {over} held continuously: the hold never reaches the threshold "
+            "(duty cycle 100 %)"
         ]
     elif verdict == "none":
+        fail = cycle.failing_t_on_s
         lines = [
-            f"no duty cycle works: even {cycle.failing_t_on_s:g} s of hold per cycle (one "
-            f"step) with {rest:g} s of rest reaches the threshold{where}"
+            f"no duty cycle works for {over}: even {fail:g} s on per {fail + rest:g} s cycle "
+            f"(one time step of hold, {rest:g} s of rest) reaches the threshold{where}"
         ]
     elif verdict == "never_held":
         lines = ["task never held: level 1 not achieved at the start"]
     elif verdict == "interrupted":
         lines = [
             "interrupted: bracket so far "
-            f"[{_or_dash(cycle.sustainable_t_on_s)}, {_or_dash(cycle.failing_t_on_s)}] s"
+            f"[{_or_dash(cycle.sustainable_t_on_s)}, {_or_dash(cycle.failing_t_on_s)}] s on "
+            f"per cycle, over {over}"
         ]
     else:
-        ok = cycle.sustainable_t_on_s
-        lines = [
-            f"sustainable: t_on ≤ {ok:g} s of hold per cycle with {rest:g} s of rest stays "
-            f"below the threshold for {cycle.horizon_s:g} s; {cycle.failing_t_on_s:g} s "
-            f"reaches it{where}",
-            _duty_line(cycle),
-        ]
+        lines = _bracket_lines(cycle, where)
     guideline = cycle.guideline()
     if guideline is not None and verdict != "never_held":
         lines.append(potvin_line(guideline, cycle.duty_cycle_pct))
@@ -240,19 +238,25 @@ def potvin_line(guideline: dict, duty_cycle_pct: float | None) -> str:
     return line
 
 
-def _duty_line(cycle: DutyCycle) -> str:
-    """The duty cycle's bracket in words, and what limits it."""
-    ok, rest = cycle.sustainable_t_on_s, cycle.rest_s
+def _bracket_lines(cycle: DutyCycle, where: str) -> list[str]:
+    """The bracket in words: the longest hold found sustainable over the horizon, the
+    shortest found not, their duty cycles, and what limits the bracket's width."""
+    ok, fail, rest = cycle.sustainable_t_on_s, cycle.failing_t_on_s, cycle.rest_s
     low, high = cycle.duty_cycle_bracket_pct or (cycle.duty_cycle_pct, cycle.duty_cycle_pct)
     line = (
-        f"duty cycle: {low:.1f} % sustainable ({ok:g} s of every {ok + rest:g} s), {high:.1f} % not"
+        f"not sustainable: {fail:g} s on per {fail + rest:g} s cycle ({high:.1f} %) reaches "
+        f"the threshold{where}; the limit lies between the two"
     )
     if cycle.step_limited:
         line += (
             f"; the bracket is one time step ({cycle.time_step_s:g} s) wide: a shorter "
             "simulation.time_step_s narrows it"
         )
-    return line
+    return [
+        f"sustainable for {span(cycle.horizon_s)}: up to {ok:g} s on per {ok + rest:g} s cycle "
+        f"({rest:g} s of rest), a {low:.1f} % duty cycle",
+        line,
+    ]
 
 
 def _or_dash(value: float | None) -> str:

@@ -77,15 +77,14 @@ def plot_schedule(result: SimulationResult, path: Path) -> Path:
 
 
 def plot_runs(runs: Sequence[tuple[str, SimulationResult]], path: Path) -> Path:
-    """One fatigue panel per labelled run (e.g. the two ends of a duty-cycle bracket), on a
-    shared time axis, rest periods shaded."""
-    fig = Figure(figsize=(9.0, 1.0 + 2.6 * len(runs)), dpi=120)
-    axes = fig.subplots(len(runs), 1, sharex=True, squeeze=False)
-    units = {
-        _fatigue_panel(ax, result, f"{label}: {_schedule_text(result)}")
-        for ax, (label, result) in zip(axes[:, 0], runs, strict=True)
-    }
-    axes[-1, 0].set_xlabel(f"time ({units.pop() if len(units) == 1 else 'min'})")
+    """One fatigue panel per labelled run (e.g. the two ends of a duty-cycle bracket), each
+    on its own time axis (a run that stops at the threshold after minutes stays readable
+    beside one of a whole shift), rest periods shaded."""
+    fig = Figure(figsize=(9.0, 1.0 + 2.9 * len(runs)), dpi=120)
+    axes = fig.subplots(len(runs), 1, squeeze=False)
+    for ax, (label, result) in zip(axes[:, 0], runs, strict=True):
+        unit = _fatigue_panel(ax, result, f"{label}: {_schedule_text(result)}")
+        ax.set_xlabel(f"time ({unit})")
     return save_figure(fig, path)
 
 

@@ -1,5 +1,6 @@
 """The sustainable duty cycle of a task: for a rest time ``t_off`` per cycle, the longest hold
-``t_on`` per cycle with which no muscle group reaches the fatigue threshold over a horizon.
+``t_on`` per cycle with which no muscle group reaches the fatigue threshold over a horizon
+(by default an 8-hour shift).
 
 "Reaches the fatigue threshold": on some step of the simulated schedule a group's fatigue
 level is at least ``fatigue.fatigue_threshold`` (a group over its strength counts, being
@@ -10,15 +11,14 @@ step.
 
 Holds are counted in whole time steps (``t_on = n·dt``; ``t_off`` rounds up to whole steps
 as in every schedule). First the continuous hold (``t_on`` = the horizon): if it stays
-below the threshold, the task is sustainable continuously. Then one step of hold per cycle:
-if even that reaches the threshold, no duty cycle works. Otherwise bisection on n keeps a
-bracket ``n_ok < n_fail`` of simulated holds (``n_ok`` below the threshold over the
-horizon, ``n_fail`` reaching it) until ``(n_fail − n_ok)·dt ≤ tolerance`` and the duty
-cycles of its ends, ``n·dt / (n·dt + t_off)``, differ by at most ``precision`` of the lower
-one, or the bracket is one step wide (the time step then limits it, and says so). The
-bisection
-assumes that a longer hold per cycle never tires less; both ends of the reported bracket
-are simulations, whatever the assumption.
+below the threshold, the task is sustainable held continuously for the horizon. Then one
+step of hold per cycle: if even that reaches the threshold, no duty cycle works. Otherwise
+bisection on n keeps a bracket ``n_ok < n_fail`` of simulated holds (``n_ok`` below the
+threshold over the horizon, ``n_fail`` reaching it) until ``(n_fail − n_ok)·dt ≤
+tolerance`` and the duty cycles of its ends, ``n·dt / (n·dt + t_off)``, differ by at most
+``precision`` of the lower one, or the bracket is one step wide (the time step then limits
+it, and says so). The bisection assumes that a longer hold per cycle never tires less;
+both ends of the reported bracket are simulations, whatever the assumption.
 """
 
 from __future__ import annotations
@@ -44,14 +44,18 @@ from casadi_posture.output.results import (
 )
 from casadi_posture.problem import Problem, problem_from_data
 from casadi_posture.simulation import SimulationResult, simulate, whole_steps
+from casadi_posture.spec.schema import MAX_STEPS
 from casadi_posture.static import tied
 
 #: Default bisection tolerance on t_on [s] (at least one time step).
 DEFAULT_TOLERANCE_S = 5.0
 #: Default relative precision of the duty cycle's bracket: its ends within 5 % of the lower.
 DEFAULT_PRECISION = 0.05
+#: Default horizon [s]: an 8-hour shift (a problem file's duration is one run's, often 10 or
+#: 30 minutes, too short to say a hold is sustainable).
+SHIFT_S = 8 * 3600.0
 
-#: What a search found: a bracket of holds; sustainable continuously over the horizon; no
+#: What a search found: a bracket of holds; sustainable held continuously over the horizon; no
 #: hold of even one step sustainable; the task never held at the start; stopped by Ctrl-C.
 Verdict = Literal["bracketed", "continuous", "none", "never_held", "interrupted"]
 
@@ -92,7 +96,8 @@ class DutyCycle:
     ``t_off_s`` is the rest asked for and ``rest_s`` the rest on the step grid [s];
     ``sustainable_t_on_s`` the longest hold found to stay below the threshold over the
     horizon and ``failing_t_on_s`` the shortest found to reach it (None where no such
-    simulation: continuously sustainable, or none sustainable)."""
+    simulation: sustainable held continuously, or none sustainable); ``horizon_s`` the
+    simulated time [s] over which the threshold must not be reached."""
 
     problem: str
     t_off_s: float
@@ -113,7 +118,7 @@ class DutyCycle:
     @property
     def duty_cycle_pct(self) -> float | None:
         """``t_on/(t_on + t_off)`` of the sustainable hold [%]: 100 when the task is
-        sustainable continuously, 0 when no hold is; None when the search was cut short."""
+        sustainable held continuously, 0 when no hold is; None when the search was cut short."""
         if self.verdict == "continuous":
             return 100.0
         if self.verdict == "none":
@@ -234,7 +239,7 @@ def duty_cycle(
     solver: str | None = None,
 ) -> DutyCycle:
     """The longest hold per cycle with rest ``t_off_s`` [s] that never reaches the fatigue
-    threshold within ``horizon_s`` [s] (default: the problem's ``simulation.duration_s``),
+    threshold within ``horizon_s`` [s] (default ``SHIFT_S``, an 8-hour shift),
     to ``tolerance_s`` [s] (default 5 s, at least one time step) and the duty cycle to
     ``precision`` (relative, default 5 %), by bisection over simulations (module
     docstring). Ctrl-C stops it between two steps of a trial: the
@@ -244,7 +249,7 @@ def duty_cycle(
     dt = spec.simulation.time_step_s
     t_off = check_seconds(t_off_s, "t_off_s", path, positive=False)
     horizon = check_seconds(
-        spec.simulation.duration_s if horizon_s is None else horizon_s,
+        SHIFT_S if horizon_s is None else horizon_s,
         "horizon_s",
         path,
         positive=True,
@@ -262,6 +267,14 @@ def duty_cycle(
     steps = math.floor(horizon / dt + 1e-9)
     if steps < 1:
         raise ProblemError(path, "horizon_s", horizon, f"at least the time step, {dt:g} s")
+    if steps > MAX_STEPS:
+        raise ProblemError(
+            path,
+            "horizon_s",
+            horizon,
+            f"at most {MAX_STEPS} time steps of {dt:g} s ({MAX_STEPS * dt:g} s): a shorter "
+            "horizon (--horizon) or a longer simulation.time_step_s",
+        )
     start = time.perf_counter()
     trials: list[Trial] = []
     results: dict[int, SimulationResult] = {}
@@ -431,12 +444,12 @@ def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
     shown = next((c for c in cycles if c.verdict == "bracketed"), cycles[0] if cycles else None)
     if shown is not None and shown.runs:
         labelled = [
-            (f"t_on {_t_on(result)} s: {label} the threshold{_when(result)}", result)
+            (f"t_on {_t_on(result)} s: {label} the threshold{_when(result, shown)}", result)
             for label, result in shown.runs.items()
         ]
         paths.append(plot_runs(labelled, out / "duty_cycle.png"))
     if len(cycles) > 1:
-        heading = f"{Path(cycles[0].problem).stem}: horizon {cycles[0].horizon_s:g} s"
+        heading = f"{Path(cycles[0].problem).stem}: over {span(cycles[0].horizon_s)}"
         paths.append(
             plot_duty_vs_rest(
                 [c.rest_s for c in cycles],
@@ -450,13 +463,25 @@ def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
     return paths
 
 
+def span(horizon_s: float) -> str:
+    """A horizon [s] in words, always with its seconds: ``an 8-h shift (28800 s)``,
+    ``30 min (1800 s)``, ``90 s``."""
+    if horizon_s == SHIFT_S:
+        return f"an 8-h shift ({horizon_s:g} s)"
+    for unit, size in (("h", 3600.0), ("min", 60.0)):
+        if horizon_s >= size and horizon_s % size == 0:
+            return f"{horizon_s / size:g} {unit} ({horizon_s:g} s)"
+    return f"{horizon_s:g} s"
+
+
 def _t_on(result: SimulationResult) -> str:
     schedule = result.schedule
     return "?" if schedule is None else f"{schedule.hold_steps * schedule.dt_s:g}"
 
 
-def _when(result: SimulationResult) -> str:
-    """`` at 11.7 min (the trial stops there)`` for a trial that reached the threshold."""
+def _when(result: SimulationResult, cycle: DutyCycle) -> str:
+    """`` at 11.7 min (the trial stops there)`` for a trial that reached the threshold, ``
+    over an 8-h shift (28800 s)`` for one that did not."""
     if result.stop != "fatigue_threshold":
-        return ""
+        return f" over {span(cycle.horizon_s)}"
     return f" at {result.timeline.time[-1] / 60:.1f} min (the trial stops there)"
