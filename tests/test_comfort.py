@@ -184,3 +184,40 @@ def test_the_load_bound_is_the_owner_load_gradient_by_finite_differences() -> No
         ) / (2 * h)
         np.testing.assert_allclose(inequality.a, difference / np.linalg.norm(difference), atol=1e-7)
         assert inequality.b == pytest.approx(float(inequality.a @ q), rel=1e-12)
+
+
+def test_the_strategy_is_named_only_where_it_acts() -> None:
+    """The wall hold's whole-body adjustment ignores fatigue.strategy: when the shoulder
+    flexors take the constraint, the event says what acts (the whole-body adjustment bounds
+    their load), not "passive strategy on shoulder_flexion_r", and summary.json's
+    ``strategy`` and ``r_min`` are null, as ``fatigue_weight`` is under the paper's
+    adjustment; there the strategy acts, and is named."""
+    from dataclasses import replace
+
+    from casadi_posture import simulation
+    from casadi_posture.adjustment.constraint import FatigueConstraint
+    from casadi_posture.output.results import summary
+
+    sets = {"fatigue.strategy": "passive", "simulation.duration_s": 1.0}
+    problem = cp.load(PROBLEMS / "standing_wall_horizontal.toml", sets)
+    settings = simulation.constraint_settings(problem)
+    assert settings.adjustment == "whole_body" and settings.keep_levels == 2
+    built = simulation._built(problem, settings.keep_levels)
+    names = [h.name for h in problem.body.half_joints]
+    levels = np.zeros(len(names))
+    levels[names.index("shoulder_flexors_r")] = settings.fatigue_threshold
+    weight = settings.fatigue_weight
+    whole = f"whole-body adjustment (levels 1-2 kept, effort weighed by 1 + {weight:g}·F)"
+    for adjustment, whole_body, detail in (
+        ("whole_body", built.whole_body, f"{whole}: its load bounded"),
+        ("paper", None, "passive strategy on shoulder_flexion_r"),
+    ):
+        chosen = replace(settings, adjustment=adjustment)
+        constraint = FatigueConstraint(problem.body, problem.passive, chosen, whole_body=whole_body)
+        on = [e for e in constraint.update(levels, 10.0) if e.kind == "constraint_on"]
+        assert [(e.half_joint, e.detail) for e in on] == [("shoulder_flexors_r", detail)]
+    report = summary(cp.simulate(problem).result)
+    assert (report["adjustment"], report["strategy"], report["r_min"]) == ("whole_body", None, None)
+    paper = cp.load(PROBLEMS / "holding_m45.toml", {"fatigue.strategy": "passive"})
+    report = summary(cp.simulate(paper.with_overrides({"simulation.duration_s": 1.0})).result)
+    assert (report["adjustment"], report["strategy"], report["r_min"]) == ("paper", "passive", 0.9)

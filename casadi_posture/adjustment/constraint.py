@@ -162,14 +162,16 @@ class FatigueConstraint:
         if self.owner is None and self.fatigued.any():
             self.owner = int(np.argmin(self._crossed_at))
             events.append(
-                Event(
-                    time_s,
-                    "constraint_on",
-                    names[self.owner],
-                    f"{s.strategy} strategy on {self.body.half_joints[self.owner].dof}",
-                )
+                Event(time_s, "constraint_on", names[self.owner], self._acting(self.owner))
             )
         return events
+
+    def _acting(self, owner: int) -> str:
+        """What acts on the ``owner``: the paper's strategy on its joint (``passive strategy
+        on shoulder_flexion_r``), or the whole-body adjustment, which uses no strategy."""
+        if self.whole_body is not None:
+            return f"{self.settings.describe()}: its load bounded"
+        return f"{self.settings.strategy} strategy on {self.body.half_joints[owner].dof}"
 
     def hyperplane(
         self, q: np.ndarray, torques: Torques, levels: np.ndarray | None = None
