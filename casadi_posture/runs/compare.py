@@ -89,7 +89,7 @@ def compare(problem: Problem, starts: int = 0, seed: int = 0) -> Comparison:
         _comparison(problem, hierarchy, q0, pair, evidence)
         for q0, pair in zip(drawn, solved[1:], strict=True)
     ]
-    return replace(mine, starts=Starts.of(others, seed, hierarchy.level_units()))
+    return replace(mine, starts=Starts.of(others, seed))
 
 
 #: The most random starts ``compare`` takes (each solves the problem twice).
@@ -121,14 +121,17 @@ class Starts:
     comparisons: tuple[Comparison, ...]
 
     @classmethod
-    def of(cls, comparisons: list[Comparison], seed: int, units: list[str]) -> Starts:
-        """The summary of the comparisons from random starts of ``seed``; ``units``: the
-        levels' units."""
-        outcomes = [c.outcome for c in comparisons]
+    def of(cls, comparisons: list[Comparison], seed: int) -> Starts:
+        """The summary of the comparisons from random starts of ``seed``; the residual gap
+        is the largest of a target level's (not the criterion's, whose minima differ in a
+        way the joint difference shows)."""
+        first = comparisons[0]
+        targets = [k for k in range(len(first.levels)) if k != first.criterion]
         gaps = np.array(
             [np.abs(c.nullspace.residuals - c.lexicographic.residuals) for c in comparisons]
-        )
+        )[:, targets]
         start, level = np.unravel_index(int(np.argmax(gaps)), gaps.shape)
+        outcomes = [c.outcome for c in comparisons]
         return cls(
             len(comparisons),
             seed,
@@ -139,7 +142,7 @@ class Starts:
             sum(not c.agree for c in comparisons),
             max(c.max_joint_difference_deg for c in comparisons),
             float(gaps[start, level]),
-            units[level],
+            first.units[targets[level]],
             tuple(comparisons),
         )
 
@@ -149,8 +152,8 @@ class Starts:
             f"{self.count} random starts (seed {self.seed}): {self.agree} agree ({self.reached} "
             f"reach the task, {self.local_minimum} at a local minimum, {self.unreachable} "
             f"unreachable), {self.differ} differ; worst disagreement "
-            f"{self.worst_joint_difference_deg:.3g} deg, {self.worst_residual_gap:.3g} "
-            f"{self.worst_gap_unit}"
+            f"{self.worst_joint_difference_deg:.3g} deg, "
+            f"{amount(self.worst_residual_gap, self.worst_gap_unit)}"
         )
 
 
@@ -227,7 +230,7 @@ class _Evidence:
         reach: its chain's reach, else that no start reached it."""
         why = beyond_reach(self.hierarchy.body, self.hierarchy.levels[k])
         unit = self.hierarchy.level_units()[k]
-        return why or f"no start of {self.starts} reached it, the closest {closest:.3g} {unit}"
+        return why or f"no start of {self.starts} reached it, the closest {amount(closest, unit)}"
 
     def one_minimum(self, ns: IKResult, lx: IKResult) -> bool:
         """Whether two answers of the same residuals are one minimum: the posture halfway
@@ -256,12 +259,20 @@ class _Evidence:
         if closest > ACHIEVED_TOLERANCE:
             notes.append(f"level {k + 1} unreachable ({self.out_of_reach(k, closest)})")
             notes.append(
-                f"both at a local minimum ({where}): another start ends {closest:.3g} "
-                f"{unit} from it"
+                f"both at a local minimum ({where}): another start ends "
+                f"{amount(closest, unit)} from it"
             )
             return UNREACHABLE, "; ".join(notes)
         notes.append(f"both at a local minimum ({where}): level {k + 1} reached from another start")
         return (UNREACHABLE if shy else LOCAL_MINIMUM), "; ".join(notes)
+
+
+def amount(value: float, unit: str) -> str:
+    """A residual and its unit: '0.066 m', '0.08 (rad, m)' for a level of mixed units, '1.4'
+    for the comfort level's unit 1."""
+    if unit == "1":
+        return f"{value:.3g}"
+    return f"{value:.3g} ({unit})" if "," in unit else f"{value:.3g} {unit}"
 
 
 def _limits(body: BodyModel, q: np.ndarray) -> str:
@@ -313,9 +324,9 @@ def _gap(ns: IKResult, lx: IKResult, k: int, missed: list[int], evidence: _Evide
         done, short = (ns, lx) if ns.achieved[k] else (lx, ns)
         return (
             f"level {k + 1} reached by {done.solver} only; {short.solver} stops "
-            f"{short.residuals[k]:.3g} {unit} from it ({_limits(body, short.q)})"
+            f"{amount(short.residuals[k], unit)} from it ({_limits(body, short.q)})"
         )
-    ends = f"{ns.residuals[k]:.3g} vs {lx.residuals[k]:.3g} {unit}"
+    ends = f"{ns.residuals[k]:.3g} vs {amount(lx.residuals[k], unit)}"
     closer = min((ns, lx), key=lambda r: r.residuals[k])
     better = evidence.better(closer.residuals)
     if better is not None and better[0] <= k:

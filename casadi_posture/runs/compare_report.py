@@ -13,7 +13,7 @@ import numpy as np
 from casadi_posture.output.html_page import table, write_page
 from casadi_posture.output.posture_page import Case, page_html, section
 from casadi_posture.problem import Problem
-from casadi_posture.runs.compare import Comparison, Starts
+from casadi_posture.runs.compare import Comparison, Starts, amount
 from casadi_posture.static import level_outcome
 
 
@@ -69,7 +69,7 @@ def _starts_cells(starts: Starts | None) -> list[object]:
         return [""] * len(STARTS_HEADERS)
     return [starts.count, starts.agree, starts.reached, starts.local_minimum, starts.unreachable,
             starts.differ, starts.worst_joint_difference_deg,
-            f"{starts.worst_residual_gap:.3g} {starts.worst_gap_unit}"]  # fmt: skip
+            amount(starts.worst_residual_gap, starts.worst_gap_unit)]  # fmt: skip
 
 
 def compare_page(pairs: Sequence[tuple[Problem, Comparison, Sequence[str]]]) -> str:
