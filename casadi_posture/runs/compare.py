@@ -67,7 +67,7 @@ def compare(problem: Problem, starts: int = 0, seed: int = 0) -> Comparison:
     (``random_starts`` of ``seed``), summed up in ``Comparison.starts``. Each solver is
     built once and solves from every start. An answer both solvers share that misses a
     level is judged against every answer found (at least ``CHECK_STARTS`` random starts
-    then) and the chain's reach: a local minimum when another start does better, else
+    then) and the chain's reach: a local minimum when another start reaches the level, else
     unreachable, saying on which evidence."""
     if not 0 <= starts <= MAX_STARTS:
         raise ValueError(f"starts = {starts}: expected 0 to {MAX_STARTS}")
@@ -227,10 +227,14 @@ class _Evidence:
 
     def out_of_reach(self, k: int, closest: float) -> str:
         """Why level ``k`` (index), which the best answer misses by ``closest``, is out of
-        reach: its chain's reach, else that no start reached it."""
+        reach: its chain's reach, else that no start reached it (while holding the levels
+        above, when one reached it at their expense)."""
         why = beyond_reach(self.hierarchy.body, self.hierarchy.levels[k])
+        if why:
+            return why
+        held = any(r[k] <= ACHIEVED_TOLERANCE for r in self.residuals) * " holding the levels above"
         unit = self.hierarchy.level_units()[k]
-        return why or f"no start of {self.starts} reached it, the closest {amount(closest, unit)}"
+        return f"no start of {self.starts} reached it{held}, the closest {amount(closest, unit)}"
 
     def one_minimum(self, ns: IKResult, lx: IKResult) -> bool:
         """Whether two answers of the same residuals are one minimum: the posture halfway
