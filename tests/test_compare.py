@@ -14,7 +14,7 @@ from conftest import PROBLEMS
 
 from casadi_posture.cli import main
 from casadi_posture.problem import load_problem
-from casadi_posture.runs.compare import LOCAL_MINIMUM, REACHED, UNREACHABLE, compare
+from casadi_posture.runs.compare import LOCAL_MINIMUM, REACHED, UNREACHABLE, compare, rows
 
 WITH_TASKS = [p for p in sorted(PROBLEMS.glob("*.toml")) if load_problem(p).tasks]
 
@@ -237,3 +237,11 @@ def test_each_start_is_its_seeds_draw_and_the_solvers_are_built_once(monkeypatch
     expected = np.random.default_rng(7).uniform(body.lower, body.upper, size=(5, body.n))
     assert np.array_equal([c.start for c in comparison.starts.comparisons], expected)
     assert built == ["nullspace", "lexicographic"]
+
+
+def test_every_compare_csv_column_is_documented() -> None:
+    text = (PROBLEMS.parent / "docs" / "outputs.md").read_text()
+    section = text[text.index("## `compare`") :].split("\n## ")[0]
+    comparison = compare(load_problem(PROBLEMS / "holding_m45.toml"), starts=1)
+    missing = [c for c in rows(comparison)[0] if f"`{c}`" not in section]
+    assert not missing
