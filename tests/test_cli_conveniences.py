@@ -187,7 +187,7 @@ def test_force_starts_a_run_over_and_keeps_the_users_files(tmp_path: Path) -> No
     again = runner.invoke(main, [*args[:-1], "loads[0].mass_kg=3", "--out", str(out), "--force"])
     assert again.exit_code == 0, again.output
     assert (out / "notes.txt").read_text() == "mine"
-    assert sorted(p.name for p in (out / "cases").iterdir()) == ["loads_0_.mass_kg=3"]
+    assert sorted(p.name for p in (out / "cases").iterdir()) == ["mass_kg=3"]
     # one figure per outcome of a simulated what-if (runs/whatif_plots.py OUTCOMES) that a
     # case has a value for: not the first group at the threshold (never reached in 5 s) nor
     # the low-back compression (a planar arm has no lumbar joint)

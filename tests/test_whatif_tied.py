@@ -166,3 +166,34 @@ def test_paired_still_pairs_the_ith_values(tmp_path: Path) -> None:
     short = [a.replace("1.52,1.87", "1.52") for a in args]
     uneven = CliRunner().invoke(main, [*short, "--force"])
     assert uneven.exit_code == 2 and "lists of one length with --paired" in uneven.stderr
+
+
+def test_case_names_are_short_readable_unique_and_safe_as_folders(tmp_path: Path) -> None:
+    """Both hands' heights and both halves of the box: each case is named by each axis's
+    last key part and its value (it was ``tasks_2_.target_m_2_,tasks_3_.target_m_2_=1.2__
+    loads_0_.mass_kg,loads_1_.mass_kg=2.0``); two axes of one last part keep one part more;
+    values a folder cannot hold, or too many characters, end in a digest instead of
+    colliding; a grid is resumed under the same names."""
+    cases = grid(SHELF, [(HEIGHTS, [1.2, 1.4]), (HALVES, [2.0, 4.0])], solver=None, simulate=False)
+    assert [c.name for c in cases] == [
+        "target_m_2=1.2,mass_kg=2",
+        "target_m_2=1.2,mass_kg=4",
+        "target_m_2=1.4,mass_kg=2",
+        "target_m_2=1.4,mass_kg=4",
+    ]
+    split = [("loads[0].mass_kg", [2.5]), ("loads[1].mass_kg", [3]), ("solver", ["nullspace"])]
+    (alone,) = grid(SHELF, split, solver=None, simulate=False)
+    assert alone.name == "loads_0.mass_kg=2.5,loads_1.mass_kg=3,solver=nullspace"
+    titles = ["a/b", "a b", "a?b", "x" * 300]
+    names = [c.name for c in grid(HOLD, [("title", titles)], solver=None, simulate=False)]
+    assert len(set(names)) == 4 and all(len(n) <= 80 and "/" not in n for n in names)
+    assert all(n.startswith("title=a_b-") for n in names[:3])
+    assert grid(HOLD, [("title", titles)], solver=None, simulate=False)[3].name == names[3]
+    args = ["whatif", str(HOLD), "--vary", "loads[0].mass_kg=1,2.5", "--static", "--quiet"]
+    out = ["--out", str(tmp_path / "w")]
+    assert CliRunner().invoke(main, [*args, *out]).exit_code == 0
+    folders = sorted((tmp_path / "w" / "cases").iterdir())
+    assert [p.name for p in folders] == ["mass_kg=1", "mass_kg=2.5"]
+    stamps = [(p / "row.json").stat().st_mtime_ns for p in folders]
+    assert CliRunner().invoke(main, [*args, *out, "--resume"]).exit_code == 0
+    assert [(p / "row.json").stat().st_mtime_ns for p in folders] == stamps  # none run again

@@ -474,5 +474,5 @@ def _cell(value: Any) -> Any:
 
 
 def safe_name(text: str) -> str:
-    """A folder name: letters, digits and -_=., kept, anything else as _."""
-    return "".join(c if c.isalnum() or c in "-_=.," else "_" for c in text).strip("_")
+    """A folder name: letters, digits and -_=.,+ kept, anything else as _."""
+    return "".join(c if c.isalnum() or c in "-_=.,+" else "_" for c in text).strip("_")

@@ -3,6 +3,7 @@ one axis), run as a batch; runs/whatif_plots.py draws its figures."""
 
 from __future__ import annotations
 
+import hashlib
 import itertools
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -43,7 +44,7 @@ def parse_vary(
     parts.append(current)
     if any(not p.strip() for p in parts):
         raise ProblemError(problem, "--vary", text, "no empty value between commas")
-    values = [parse_value(p.strip()) for p in parts]
+    values = [parse_value(p.strip(), problem, "--vary") for p in parts]
     if unique and len({repr(v) for v in values}) != len(values):
         raise ProblemError(problem, "--vary", text, "each value once")
     if any(isinstance(v, float) for v in values):
@@ -102,20 +103,77 @@ def grid(
     for value in dict(varies).get(SOLVER, []):
         check_solver(value, problem, "--vary solver")
     text = read_problem_text(problem)
-    axes = [",".join(group) for group in tied]
     cases = []
-    for combo in combos:
+    for name, combo in zip(case_names(tied, combos), combos, strict=True):
         chosen = dict(base or {}) | {
             key: value for group, value in zip(tied, combo, strict=True) for key in group
         }
         case_solver = chosen.pop(SOLVER, solver)
-        name = safe_name("__".join(f"{a}={v}" for a, v in zip(axes, combo, strict=True)))
         _validated(problem, chosen, text)
         if not cases:  # an unknown key is named before the unit of the keys it is tied to
             for group in tied:
                 check_units(group, problem)
-        cases.append(Case(name or "base", problem, chosen, case_solver, simulate, text))
+        cases.append(Case(name, problem, chosen, case_solver, simulate, text))
     return cases
+
+
+#: Longest case name (a folder's); a longer one is cut and ends in a digest of its values.
+MAX_NAME = 80
+
+
+def case_names(tied: Sequence[Sequence[str]], combos: Sequence[Sequence[Any]]) -> list[str]:
+    """Each case's name, ``mass_kg=6,target_m_2=1.2``: per axis its label (``axis_labels``)
+    and its value, safe as a folder name; a name two cases would share (values that differ
+    only in characters a folder name cannot hold) or longer than ``MAX_NAME`` is cut and
+    ends in a digest of its values, so every name is unique and the same on every run of
+    the grid (``--resume``); ``base`` for a grid without axes."""
+    labels = axis_labels(tied)
+    names = [
+        safe_name(",".join(f"{a}={_shown(v)}" for a, v in zip(labels, combo, strict=True)))
+        or "base"
+        for combo in combos
+    ]
+    taken = {name: names.count(name) for name in names}
+    return [
+        name
+        if len(name) <= MAX_NAME and taken[name] == 1
+        else f"{name[: MAX_NAME - 9]}-{hashlib.sha1(repr(combo).encode()).hexdigest()[:8]}"
+        for name, combo in zip(names, combos, strict=True)
+    ]
+
+
+def axis_labels(tied: Sequence[Sequence[str]]) -> list[str]:
+    """A short label per axis: the last part of its keys (``loads[0].mass_kg`` ->
+    ``mass_kg``, ``tasks[2].target_m[2]`` -> ``target_m_2``), with more parts where two
+    axes would share one; keys tied to one value that share a label give it once, others
+    are joined by ``+``."""
+    parts = [[key.split(".") for key in group] for group in tied]
+    depth = [1] * len(tied)
+
+    def label(k: int) -> str:
+        shown = (".".join(p[-depth[k] :]) for p in parts[k])
+        return "+".join(dict.fromkeys(shown)).replace("[", "_").replace("]", "")
+
+    while True:
+        labels = [label(k) for k in range(len(tied))]
+        clash = [k for k, text in enumerate(labels) if labels.count(text) > 1]
+        deeper = [k for k in clash if depth[k] < max(len(p) for p in parts[k])]
+        if not deeper:
+            return labels
+        for k in deeper:
+            depth[k] += 1
+
+
+def _shown(value: Any) -> str:
+    """A varied value in a case name: ``6`` for 6.0, ``0.5_0_1.2`` for a list."""
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, float):
+        short = f"{value:g}"
+        return short if float(short) == value else repr(value)
+    if isinstance(value, list):
+        return "_".join(_shown(v) for v in value)
+    return str(value)
 
 
 def _validated(problem: str, chosen: dict[str, Any], text: str) -> None:
