@@ -56,8 +56,8 @@ def _rests(values: tuple[float, ...], problem: str) -> list[float]:
     type=TIME,
     default=None,
     metavar="TIME",
-    help="Simulated time over which the threshold must not be reached, in s or with a "
-    "unit: 1800, 30min, 8h [default: the file's simulation.duration_s].",
+    help="Simulated time over which the threshold must not be reached, a time: 1800, 30min, "
+    "4h [default: 8h, a shift; not the file's simulation.duration_s].",
 )
 @click.option(
     "--tolerance",
@@ -97,10 +97,11 @@ def duty_cycle(
     force: bool,
     as_json: bool,
 ) -> None:
-    """The sustainable duty cycle: with T_OFF seconds of rest per cycle (the load put
+    """The sustainable duty cycle: with --t-off of rest per cycle (the load put
     down), the longest hold t_on per cycle with which no muscle group reaches the fatigue
     threshold (fatigue.fatigue_threshold: where the fatigue-reducing constraint would
-    engage) within the horizon, found by bisection over simulations of the schedule.
+    engage) within the horizon (an 8-hour shift unless --horizon says otherwise), found by
+    bisection over simulations of the schedule.
 
     Prints every simulation, the bracket (the longest hold found below the threshold and
     the shortest found to reach it), the duty cycle t_on/(t_on + t_off) in %, beside it
@@ -113,7 +114,7 @@ def duty_cycle(
     Example:
       casadi-posture duty-cycle problems/holding_horizontal.toml --t-off 30
       casadi-posture duty-cycle problems/holding_horizontal.toml --t-off 0,15,30,60,120 \\
-          --horizon 1800 --out out/duty-cycle
+          --horizon 30min --out out/duty-cycle
     """
     rests = _rests(t_off, problem)
     for key, value in (("--horizon", horizon), ("--tolerance", tolerance)):
