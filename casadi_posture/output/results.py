@@ -29,7 +29,7 @@ from casadi_posture.output.plain import dumps
 from casadi_posture.output.scores import run_report, step_scores
 from casadi_posture.output.scores import timeline_columns as score_columns
 from casadi_posture.simulation import SimulationResult
-from casadi_posture.static import endurance, limiting_key, plausibility, rule
+from casadi_posture.static import endurances, limiting_key, plausibility, rule
 
 #: Recovery postures listed on screen; summary.json has them all.
 SHOWN_RECOVERIES = 5
@@ -55,10 +55,11 @@ def summary(result: SimulationResult) -> dict[str, Any]:
     ran = tl.time.size > 0
     simulated = float(tl.time[-1]) if ran else 0.0
     groups = []
+    timed = endurances(problem, tl.load[0]) if ran else [(None, None)] * len(body.half_joints)
     for k, half in enumerate(body.half_joints):
         first = np.flatnonzero(tl.fatigue[:, k] >= settings.fatigue_threshold)
         load0 = float(tl.load[0, k]) if ran else None
-        seconds, verdict = endurance(problem, k, load0) if ran else (None, None)
+        seconds, verdict = timed[k]
         groups.append(
             {
                 "half_joint": half.name,
