@@ -4,6 +4,7 @@ a load) and the figures of a multi-key grid: one per answer, against the first a
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 import pytest
@@ -197,3 +198,11 @@ def test_case_names_are_short_readable_unique_and_safe_as_folders(tmp_path: Path
     stamps = [(p / "row.json").stat().st_mtime_ns for p in folders]
     assert CliRunner().invoke(main, [*args, *out, "--resume"]).exit_code == 0
     assert [(p / "row.json").stat().st_mtime_ns for p in folders] == stamps  # none run again
+    run = tmp_path / "w" / "run.json"  # a grid started under the old names
+    record = json.loads(run.read_text())
+    record["cases"] = {f"loads_0_.{k}": v for k, v in record["cases"].items()}
+    run.write_text(json.dumps(record))
+    for folder in folders:
+        folder.rename(folder.with_name(f"loads_0_.{folder.name}"))
+    old = CliRunner().invoke(main, [*args, *out, "--resume"])
+    assert old.exit_code == 2 and "the case names of an earlier version: run it again" in old.output

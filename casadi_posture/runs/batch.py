@@ -346,7 +346,8 @@ def _same_run(out: Path, record: dict[str, Any], finished: dict[str, str]) -> No
             f"a run whose finished case {changed[0]} had other inputs"
             if same
             else "a different run (other problem files, varied keys or values, solver, "
-            "static or simulated cases, or tool version)"
+            "static or simulated cases, tool version, or the case names of an earlier "
+            "version: run it again)"
         )
     raise ProblemError(
         out,
