@@ -195,6 +195,7 @@ def problem_from_data(
     path = Path(name)
     _check_nesting(data, path)
     raw = apply(dict(data), overrides or {}, path)
+    _check_nesting(raw, path)  # the overrides' values too
     try:
         spec = ProblemSpec.model_validate(raw)
     except ValidationError as error:

@@ -5,8 +5,10 @@ from __future__ import annotations
 import re
 
 import pytest
+from click.testing import CliRunner
 from conftest import PROBLEMS
 
+from casadi_posture.cli import main
 from casadi_posture.errors import ProblemError
 from casadi_posture.problem import load_problem
 from casadi_posture.spec.overrides import apply, parse_key, parse_value
@@ -96,3 +98,21 @@ def test_a_title_says_what_the_overrides_changed(tmp_path) -> None:
     assert solved.exit_code in (0, 1), solved.output
     page = (out / "report.html").read_text()
     assert f"<h1>{title} (changed: loads[0].mass_kg = 6)</h1>" in page
+
+
+@pytest.mark.parametrize("depth", [17, 300, 600, 5000])
+def test_a_deeply_nested_value_is_one_line_naming_the_option(depth: int) -> None:
+    """Arrays nested 17 deep are past the problem file's limit (16); 600 deep, past what the
+    TOML reader can read (it was an internal RecursionError)."""
+    value = "[" * depth + "]" * depth
+    runner = CliRunner()
+    for args in (["--set", f"fatigue.strategy={value}"], ["--vary", f"title=a,{value}"]):
+        command = "solve" if args[0] == "--set" else "whatif"
+        result = runner.invoke(main, [command, str(PROBLEMS / "holding_m45.toml"), *args])
+        lines = result.stderr.strip().splitlines()
+        assert result.exit_code == 2 and len(lines) == 1, result.output
+        assert lines[0].startswith(f"error: {PROBLEMS / 'holding_m45.toml'}: ")
+        if depth <= 300:
+            assert "nested at most 16 deep" in lines[0]
+        else:
+            assert f"{args[0]}" in lines[0] and "less deeply nested" in lines[0]

@@ -102,7 +102,7 @@ def parse_sets(items: tuple[str, ...], path: str | None = None) -> dict[str, Any
     for item in items:
         example = "KEY=VALUE such as fatigue.strategy=passive"
         key, value = split_assignment(item, "--set", path, example)
-        out[key] = parse_value(value)
+        out[key] = parse_value(value, path, f"--set {key}")
     return out
 
 

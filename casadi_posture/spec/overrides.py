@@ -51,12 +51,18 @@ def split_assignment(text: str, option: str, path: Any, example: str) -> tuple[s
     return key, value
 
 
-def parse_value(text: str) -> Any:
-    """A value as TOML reads it (``5``, ``2.5``, ``true``, ``[0, 1]``); otherwise the string."""
+def parse_value(text: str, path: Any = None, key: str = "--set") -> Any:
+    """A value as TOML reads it (``5``, ``2.5``, ``true``, ``[0, 1]``); otherwise the string.
+    Arrays or tables nested too deep to read are a ``ProblemError`` naming ``key`` (the
+    option) and ``path`` (the problem file)."""
     try:
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
+    except RecursionError:
+        raise ProblemError(
+            path, key, text, "a value with arrays or tables less deeply nested"
+        ) from None
 
 
 #: The keys that set a muscle group's strength, one at a time: an override of one of them
