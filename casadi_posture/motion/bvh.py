@@ -29,7 +29,7 @@ from casadi_posture.ik.solvers import Solver, cached_solver
 from casadi_posture.ik.tasks import Frame, JointReference
 from casadi_posture.motion.angles import closest
 from casadi_posture.motion.recording import Recording
-from casadi_posture.spec.schema import BvhSpec, SolverSpec
+from casadi_posture.spec.schema import MAX_DURATION_S, MAX_STEPS, BvhSpec, SolverSpec
 
 #: Unit vectors of the axis names a file's ``up`` and ``forward`` may take.
 AXES = {
@@ -40,6 +40,12 @@ AXES = {
     "z": (0.0, 0.0, 1.0),
     "-z": (0.0, 0.0, -1.0),
 }
+#: The channels a BVH joint may have.
+CHANNELS = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
+#: Most joints a skeleton may have (a CMU skeleton has 31, one with fingers about 70).
+MAX_JOINTS = 500
+#: Largest magnitude of a channel's value: degrees, or the file's length unit.
+MAX_CHANNEL_VALUE = 1e5
 
 
 def read_bvh(
@@ -153,14 +159,165 @@ def _read(path: Path):
         head = handle.read(64)
     if not head.lstrip().upper().startswith(b"HIERARCHY"):
         raise ProblemError(path, None, None, "a BVH file (it starts with HIERARCHY)")
+    _check(path)
     try:
-        skeleton = bvhio.readAsBvh(str(path))
+        return bvhio.readAsBvh(str(path))
     except Exception as error:  # the parser raises several kinds on a malformed file
         raise ProblemError(path, None, None, f"a readable BVH file ({error})") from None
-    if int(skeleton.FrameCount) < 2 or float(skeleton.FrameTime) <= 0:
-        expected = "at least two frames and a frame time above 0 s"
-        raise ProblemError(path, "MOTION", int(skeleton.FrameCount), expected)
-    return skeleton
+
+
+class _Lines:
+    """A BVH file's lines that are not blank, split into words, read one after another."""
+
+    def __init__(self, path: Path) -> None:
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as error:
+            raise ProblemError(path, None, None, f"a readable BVH text file ({error})") from None
+        self.path = path
+        self.lines = [(n, w) for n, line in enumerate(text.splitlines(), 1) if (w := line.split())]
+        self.at = 0
+
+    def next(self, expected: str) -> tuple[int, list[str]]:
+        """The next line's number and words; none left is a one-line error: ``expected``
+        is missing, the file is cut short."""
+        if self.at == len(self.lines):
+            last = self.lines[-1][0] if self.lines else 0
+            where = f"line {last + 1} (the end of the file)"
+            raise ProblemError(self.path, where, MISSING, f"{expected}: the file is cut short")
+        self.at += 1
+        return self.lines[self.at - 1]
+
+    def take(self, words: list[str | None], expected: str) -> list[str]:
+        """The next line's words, which must be ``words`` (None: any word there)."""
+        n, got = self.next(expected)
+        if len(got) != len(words) or any(
+            w is not None and w != g for w, g in zip(words, got, strict=True)
+        ):
+            raise ProblemError(self.path, f"line {n}", " ".join(got), expected)
+        return got
+
+    def error(self, expected: str, value: Any = None) -> ProblemError:
+        """A one-line error on the line read last."""
+        n, words = self.lines[self.at - 1]
+        return ProblemError(
+            self.path, f"line {n}", " ".join(words) if value is None else value, expected
+        )
+
+
+def _check(path: Path) -> None:
+    """The BVH file ``path`` checked line by line before bvhio parses it (bvhio waits
+    forever for a line past the end of a file cut short, and takes a value that is not a
+    finite number): its hierarchy, at most ``MAX_JOINTS`` joints, each named once, with
+    known channels; ``Frames:`` (2 to ``MAX_STEPS``) lines of frames, each with a finite
+    value for every channel; a frame time [s] above 0 and within ``MAX_DURATION_S`` in all.
+    Anything else is a one-line error naming the line (the frame, the joint's channel)."""
+    lines = _Lines(path)
+    lines.take(["HIERARCHY"], "HIERARCHY")
+    channels = _hierarchy(lines)
+    lines.take(["MOTION"], "MOTION, after the hierarchy's last closing brace")
+    count = lines.take(["Frames:", None], "Frames: and the frame count")[1]
+    frames = _number(lines, count, "the number of frames", int)
+    if not 2 <= frames <= MAX_STEPS:
+        raise lines.error(f"2 to {MAX_STEPS} frames", frames)
+    word = lines.take(["Frame", "Time:", None], "Frame Time: and a time in s")[2]
+    step = _number(lines, word, "a frame time in s")
+    if not (step > 0 and (frames - 1) * step <= MAX_DURATION_S):
+        expected = f"a frame time in s above 0, {frames} frames within {MAX_DURATION_S:g} s"
+        raise lines.error(expected, step)
+    for k in range(1, frames + 1):
+        n, words = lines.next(f"frame {k} of the {frames} that Frames: says")
+        _frame(lines, words, channels, f"frame {k} (line {n})")
+    if lines.at < len(lines.lines):
+        extra = len(lines.lines) - lines.at
+        where = f"line {lines.lines[lines.at][0]}"
+        expected = f"the {frames} frames that Frames: says, and no more ({extra} more line(s))"
+        raise ProblemError(path, where, " ".join(lines.lines[lines.at][1])[:40], expected)
+
+
+def _hierarchy(lines: _Lines) -> list[str]:
+    """The skeleton's joints read from ``lines``, from ``ROOT`` to its closing brace; each
+    value of a frame's line as ``<joint> <channel>``, in the file's order."""
+    _, words = lines.next("ROOT and the root joint's name")
+    if words[0] != "ROOT" or len(words) < 2:
+        raise lines.error("ROOT and the root joint's name")
+    root = words[1]
+    channels: list[str] = []
+    names, open_joints = {root}, [_joint(lines, root, channels)]
+    while open_joints:
+        _, words = lines.next(f"JOINT, End Site or a closing brace of joint {open_joints[-1]}")
+        if words[0] == "JOINT" and len(words) >= 2:
+            if words[1] in names or len(names) == MAX_JOINTS:
+                raise lines.error(f"at most {MAX_JOINTS} joints, each named once")
+            names.add(words[1])
+            open_joints.append(_joint(lines, words[1], channels))
+        elif words[0] == "End":  # End Site
+            lines.take(["{"], "an opening brace alone on its line")
+            _offset(lines)
+            lines.take(["}"], "a closing brace alone on its line")
+        elif words == ["}"]:
+            open_joints.pop()
+        else:
+            raise lines.error(f"JOINT <name>, End Site or a closing brace of {open_joints[-1]}")
+    return channels
+
+
+def _joint(lines: _Lines, name: str, channels: list[str]) -> str:
+    """A joint's opening brace, offset and channels from ``lines``, its channels added to
+    ``channels``; its name."""
+    lines.take(["{"], "an opening brace alone on its line")
+    _offset(lines)
+    _, words = lines.next(f"CHANNELS of joint {name}")
+    count = -1
+    if len(words) > 1 and words[0] == "CHANNELS":
+        count = _number(lines, words[1], "the number of channels", int)
+    if count != len(words) - 2 or not set(words[2:]) <= set(CHANNELS):
+        raise lines.error(f"CHANNELS, their count and that many of {', '.join(CHANNELS)}")
+    channels += [f"{name} {c}" for c in words[2:]]
+    return name
+
+
+def _offset(lines: _Lines) -> None:
+    """An ``OFFSET`` line of three finite numbers."""
+    _, words = lines.next("OFFSET and three numbers")
+    if len(words) != 4 or words[0] != "OFFSET":
+        raise lines.error("OFFSET and three numbers")
+    for word in words[1:]:
+        if not abs(_number(lines, word, "an OFFSET's number")) <= MAX_CHANNEL_VALUE:
+            raise lines.error(f"a finite number within ±{MAX_CHANNEL_VALUE:g}", word)
+
+
+def _number(lines: _Lines, word: str, expected: str, kind: type = float) -> Any:
+    """``word`` as a number of ``kind``; one that is not is a one-line error on the line
+    read last: ``expected`` was."""
+    try:
+        return kind(word)
+    except ValueError:
+        raise lines.error(expected, word) from None
+
+
+def _frame(lines: _Lines, words: list[str], channels: list[str], where: str) -> None:
+    """A frame's line: a finite number within ``MAX_CHANNEL_VALUE`` for each of ``channels``."""
+    if len(words) != len(channels):
+        expected = f"{len(channels)} values, one per channel of the hierarchy"
+        raise ProblemError(lines.path, where, f"{len(words)} values", expected)
+    try:
+        values = np.array(words, dtype=float)
+    except ValueError:
+        values = np.array([_float(w) for w in words])
+    bad = np.flatnonzero(~(np.abs(values) <= MAX_CHANNEL_VALUE))
+    if bad.size:
+        j = int(bad[0])
+        expected = f"a finite number within ±{MAX_CHANNEL_VALUE:g}"
+        raise ProblemError(lines.path, f"{where}, {channels[j]}", words[j], expected)
+
+
+def _float(word: str) -> float:
+    """``word`` as a number, NaN when it is not one."""
+    try:
+        return float(word)
+    except ValueError:
+        return math.nan
 
 
 def _joints(root) -> dict:
