@@ -12,6 +12,7 @@ import ezc3d
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from recording_fuzzing import BOX, evaluate, invoke, problems, short_c3d
 
 import casadi_posture as cp
 from casadi_posture.body.tree import BodyModel
@@ -564,3 +565,76 @@ def test_segments_are_scaled_to_the_subject_from_the_static_window(
     ):
         with pytest.raises(ProblemError, match=match):
             cp.read_motion(cp.load(SEATED, sets), path, solver="nullspace")
+
+
+def _unseen(labels: list[str], points: np.ndarray) -> None:
+    points[:3, labels.index("STYLr")] = np.nan
+
+
+def _twice(labels: list[str], points: np.ndarray) -> None:
+    labels[labels.index("STYLu")] = "STYLr"
+
+
+def _infinite(labels: list[str], points: np.ndarray) -> None:
+    points[0, labels.index("ASISr"), 11] = np.inf
+
+
+def _far(labels: list[str], points: np.ndarray) -> None:
+    points[2, labels.index("T1"), 4] = 2e5  # 200 m in mm
+
+
+def _renamed(labels: list[str], points: np.ndarray) -> None:
+    labels[labels.index("STYLr")] = "STYL_R"
+
+
+@pytest.mark.parametrize(
+    ("change", "key", "said"),
+    [
+        (_renamed, "motion.markers.wrist_r = 'STYLr'", "a marker label of {c3d} (did you mean"),
+        (_twice, "motion.markers.wrist_r = 'STYLr'", "found once in {c3d} (it is there 2 times)"),
+        (_unseen, "motion.scale_segments = 'forearm'", "wrist_r are seen in {c3d}"),
+        (_infinite, "{c3d}: ASISr (frame 12, x in m) = inf", "within 100 m of the lab's origin"),
+        (_far, "{c3d}: T1 (frame 5, z in m) = 200.0", "within 100 m of the lab's origin"),
+    ],
+)
+def test_a_marker_missing_twice_unseen_or_infinite_is_one_line_naming_the_file(
+    change: Callable[[list[str], np.ndarray], None], key: str, said: str, tmp_path: Path
+) -> None:
+    """The shipped C3D file with a marker renamed, named as another, never seen, or with an
+    infinite or far coordinate (internal errors before: ValueError, LinAlgError, TypeError)."""
+    c3d = short_c3d(tmp_path / "box.c3d", change)
+    invoked = invoke(evaluate(BOX, c3d, tmp_path / "out"))
+    assert invoked.exit_code == 2 and not problems(invoked, c3d), invoked
+    assert key.format(c3d=c3d) in invoked.stderr and said.format(c3d=c3d) in invoked.stderr
+
+
+def test_a_label_not_in_the_file_is_refused_with_the_labels_there_are(tmp_path: Path) -> None:
+    """A mapped label the file does not have (met first when the segments are scaled: an
+    internal error before) names the file's labels when none is close; a label twice in a
+    list, or hundreds of them, is refused by the problem file's schema."""
+    c3d = short_c3d(tmp_path / "box.c3d")
+    wrist = "motion.markers.wrist_r=['STYLr', 'ZZZ']"
+    invoked = invoke([*evaluate(BOX, c3d, tmp_path / "out"), "--set", wrist])
+    assert invoked.exit_code == 2 and not problems(invoked, c3d), invoked
+    labels = read_c3d(c3d).labels
+    assert f"motion.markers.wrist_r = 'ZZZ': expected a marker label of {c3d}" in invoked.stderr
+    assert f"(its {len(labels)} labels: ACRO_tip, ARMl, " in invoked.stderr
+    many = {"motion.markers.pelvis": ["ASISr", "ASISl", "PSISr", "PSISl"] * 100}
+    message = _error(cp.load, BOX, many)
+    assert message.endswith(
+        "motion.markers: expected pelvis: each label once ('ASISr' is there 100 times)"
+    )
+
+
+def test_a_file_cut_short_is_refused_with_the_frames_its_header_declares(tmp_path: Path) -> None:
+    """ezc3d reads a C3D file cut short without a word (the frames it holds); the header says
+    how many there were."""
+    c3d = short_c3d(tmp_path / "box.c3d")
+    data = c3d.read_bytes()
+    cut = tmp_path / "cut.c3d"
+    cut.write_bytes(data[: len(data) - 3000])
+    message = _error(read_c3d, cut)
+    held = ezc3d.c3d(str(cut))["data"]["points"].shape[2]
+    expected = "expected the 30 frames its header declares: the file is cut short"
+    assert message == f"{cut}: frames = {held}: {expected}"
+    assert read_c3d(c3d).time.size == 30

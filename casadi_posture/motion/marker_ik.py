@@ -40,7 +40,7 @@ from casadi_posture.ik.result import IKResult
 from casadi_posture.ik.solvers import cached_solver
 from casadi_posture.ik.tasks import JointReference, Offset, Position
 from casadi_posture.motion.angles import closest
-from casadi_posture.motion.markers import Markers, read_c3d
+from casadi_posture.motion.markers import Markers, check_labels, read_c3d
 from casadi_posture.motion.recording import Recording, fill_gaps
 from casadi_posture.spec.schema import MotionSpec, SolverSpec
 
@@ -413,15 +413,7 @@ def _points(
         if name not in body.landmarks and not calibrating:
             expected = "a landmark: a segment's markers are placed by motion.calibrate_s"
             raise ProblemError(problem, key, name, expected)
-        for label in labels:
-            count = markers.labels.count(label)
-            if count == 0:
-                close = closest(label, list(markers.labels))
-                expected = f"a marker label of {markers.source} ({close})"
-                raise ProblemError(problem, key, label, expected)
-            if count > 1:
-                expected = f"a label found once in {markers.source} (it is there {count} times)"
-                raise ProblemError(problem, key, label, expected)
+        check_labels(markers, {name: labels}, "motion.markers", problem)
         if name in body.landmarks:
             points[name] = list(labels)
         else:
@@ -451,17 +443,16 @@ def _carriers(
             close = closest(name, list(body.landmarks))
             expected = f"a landmark of the body not in motion.markers: {close}"
             raise ProblemError(problem, key, name, expected)
-        for label in labels:
-            if label not in markers.labels:
-                close = closest(label, list(markers.labels))
-                expected = f"a marker label of {markers.source} ({close})"
-                raise ProblemError(problem, key, label, expected)
+        check_labels(markers, {name: labels}, "motion.clusters", problem)
         xyz = np.stack([markers.marker(label) for label in labels], axis=1)
         seen = np.flatnonzero(np.isfinite(xyz).all(axis=(1, 2)))
         first = xyz[seen[0]] if seen.size else np.zeros((len(labels), 3))
         spread = np.linalg.svd(first - first.mean(axis=0), compute_uv=False)
         if spread[1] < ROOT_SPREAD_M * np.sqrt(len(labels)):
-            expected = "3 or more markers, not on one line, seen together in one frame at least"
+            expected = (
+                "3 or more markers, not on one line, seen together in one frame at least of "
+                f"{markers.source}"
+            )
             raise ProblemError(problem, key, list(labels), expected)
         out.update({f"{name}:{label}": [label] for label in labels})
     return out

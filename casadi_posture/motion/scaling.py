@@ -13,7 +13,7 @@ import numpy as np
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.data.parameters import data_name
 from casadi_posture.errors import ProblemError
-from casadi_posture.motion.markers import Markers
+from casadi_posture.motion.markers import Markers, check_labels
 
 #: A measured length this many times the body's, or its inverse, is refused: the markers are
 #: mapped to the wrong landmarks, or the file's units are not what it says.
@@ -54,12 +54,18 @@ def measured_lengths(
             wanted = " or ".join(f"{a} and {b}" for a, b in ends)
             expected = f"a segment whose end landmarks are mapped in motion.markers ({wanted})"
             raise ProblemError(problem, key, name, expected)
+        check_labels(
+            markers, {n: mapping[n] for pair in mapped for n in pair}, "motion.markers", problem
+        )
         lengths = []
         for a, b in mapped:
             first, second = (_mean(markers, mapping[n]) for n in (a, b))
             seen = inside & np.isfinite(first).all(axis=1) & np.isfinite(second).all(axis=1)
             if not seen.any():
-                expected = f"frames of motion.calibrate_s where the markers of {a} and {b} are seen"
+                expected = (
+                    f"frames of motion.calibrate_s where the markers of {a} and {b} are seen "
+                    f"in {markers.source}"
+                )
                 raise ProblemError(problem, key, name, expected)
             length = float(np.linalg.norm(second[seen] - first[seen], axis=1).mean())
             model = float(np.linalg.norm(zero[b] - zero[a]))

@@ -602,6 +602,16 @@ class MotionSpec(Strict):
             raise ValueError("at least 3 landmarks, each mapped to a list of marker labels")
         return value
 
+    @field_validator("markers", "clusters")
+    @classmethod
+    def _labels_once(cls, value: dict[str, list[str]]) -> dict[str, list[str]]:
+        for name, labels in value.items():
+            twice = next((label for label in labels if labels.count(label) > 1), None)
+            if twice is not None:
+                count = labels.count(twice)
+                raise ValueError(f"{name}: each label once ({twice!r} is there {count} times)")
+        return value
+
 
 class SolverSpec(Strict):
     """IK solver and its options; an option left out takes the solver's own default."""
