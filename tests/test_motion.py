@@ -160,6 +160,31 @@ def test_bad_files_are_one_line_errors_with_exit_2(
     assert "Traceback" not in result.output
 
 
+def test_angles_in_another_unit_are_refused_and_a_tiny_step_too(tmp_path: Path) -> None:
+    """Angles × 1000 (millidegrees) are refused at the first one beyond a turn (the passive
+    torques overflowed and the report ended in an internal error); a --resample step of
+    5e-324 s asks for more frames than the limit (an OverflowError before). A turn itself
+    is still read: flagged outside the body's range, every number finite."""
+    out = str(tmp_path / "out")
+    milli = _arm_csv(tmp_path / "milli.csv", [0.0, 45000.0], [90000.0, 90000.0])
+    result = CliRunner().invoke(main, ["evaluate", ARM, "--motion", str(milli), "--out", out])
+    assert result.exit_code == 2, result.output
+    expected = "expected an angle in degrees within ±360° (another unit?)"
+    assert (
+        result.stderr.strip() == f"error: {milli}: shoulder_flexion (frame 2) = 45000.0: {expected}"
+    )
+    good = _arm_csv(tmp_path / "arm.csv", [0.0, 360.0], [90.0, -360.0])
+    args = ["evaluate", ARM, "--motion", str(good), "--out", out, "--force", "--no-report"]
+    result = CliRunner().invoke(main, [*args, "--resample", "5e-324"])
+    assert result.exit_code == 2, result.output
+    expected = "expected at most 100000 frames: a longer step (the recording is 1 s)"
+    assert result.stderr.strip() == f"error: {good}: --resample = 5e-324: {expected}"
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 1 and "outside the body's range" in result.output, result.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(), parse_constant=float)
+    assert all(math.isfinite(g["peak_load_pct_mvc"]) for g in summary["half_joints"])
+
+
 def test_radians_are_refused(tmp_path: Path) -> None:
     problem = cp.load(STANDING)
     names = problem.body.dof_names

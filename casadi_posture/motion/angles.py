@@ -26,6 +26,8 @@ RADIANS_BELOW_DEG = math.pi
 TYPO_SIMILARITY = 0.85
 #: Outside its range by more than this [deg], a DOF's recorded angle is flagged.
 RANGE_SLACK_DEG = 1.0
+#: Beyond this |angle| [deg] a value is not a joint's angle in degrees: another unit.
+MAX_ANGLE_DEG = 360.0
 
 
 def read_table(path: Path) -> dict[str, np.ndarray | list[str]]:
@@ -115,6 +117,7 @@ def read_angles(
         raise ProblemError(path, missing[0], MISSING, expected)
     degrees = {dof: _numeric(table, column, path) for column, dof in dofs.items()}
     _check_not_radians(degrees, path)
+    _check_within_a_turn(degrees, {d: c for c, d in dofs.items()}, path)
     q = np.empty((time.size, len(body.dofs)))
     notes, flags = [], []
     filled_runs = 0
@@ -222,6 +225,20 @@ def _check_not_radians(degrees: Mapping[str, np.ndarray], path: Path) -> None:
             "(multiply by 57.2958)"
         )
         raise ProblemError(path, column, largest, expected)
+
+
+def _check_within_a_turn(
+    degrees: Mapping[str, np.ndarray], columns: Mapping[str, str], path: Path
+) -> None:
+    """Angles [deg] (by DOF, from the file's ``columns``) within ±``MAX_ANGLE_DEG``; the first
+    beyond, in another unit (millidegrees: angles × 1000), is a one-line error naming its
+    column and frame."""
+    for dof, values in degrees.items():
+        over = np.flatnonzero(np.abs(values) > MAX_ANGLE_DEG)
+        if over.size:
+            k = int(over[0])
+            expected = f"an angle in degrees within ±{MAX_ANGLE_DEG:g}° (another unit?)"
+            raise ProblemError(path, f"{columns[dof]} (frame {k + 1})", float(values[k]), expected)
 
 
 def _out_of_range(

@@ -109,14 +109,15 @@ def resample(recording: Recording, step_s: float) -> Recording:
     interpolated linearly between the frames around it."""
     if not (math.isfinite(step_s) and step_s > 0):
         raise ProblemError(None, "--resample", step_s, "a step in s above 0")
-    count = math.floor(recording.duration_s / step_s + 1e-9) + 1
+    steps = recording.duration_s / step_s  # inf for a step of 5e-324 s
+    count = math.floor(steps + 1e-9) + 1 if steps < MAX_STEPS else MAX_STEPS + 1
     if count > MAX_STEPS:
         expected = f"at most {MAX_STEPS} frames: a longer step (the recording is "
         expected += f"{recording.duration_s:g} s)"
-        raise ProblemError(None, "--resample", step_s, expected)
+        raise ProblemError(recording.source, "--resample", step_s, expected)
     if count < 2:
         expected = f"a step shorter than the recording ({recording.duration_s:g} s)"
-        raise ProblemError(None, "--resample", step_s, expected)
+        raise ProblemError(recording.source, "--resample", step_s, expected)
     time = recording.time[0] + step_s * np.arange(count)
     q = np.column_stack([np.interp(time, recording.time, col) for col in recording.q.T])
     held = recording.held
