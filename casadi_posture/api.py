@@ -48,6 +48,7 @@ from casadi_posture.output.results import (
 )
 from casadi_posture.output.rows import simulation_row
 from casadi_posture.output.run_files import write_run
+from casadi_posture.output.writable import check_writable
 from casadi_posture.problem import (
     Problem,
     load_problem,
@@ -141,7 +142,7 @@ def check_figure(path: Path, *, force: bool, key: str, source: str | Path | None
     if path.suffix.lstrip(".").lower() not in formats:
         expected = f"a figure file ending in one of {', '.join('.' + f for f in sorted(formats))}"
         raise ProblemError(source, key, str(path), expected)
-    check_out(path, force=force, key=key)
+    check_out(path, force=force, key=key, folder=False)
 
 
 def solve(problem: Problem, solver: str | None = None) -> StaticAnswer:
@@ -209,7 +210,7 @@ class Simulation:
         new file, or any with ``force``. None when Ctrl-C stopped it (no file is left)."""
         path = Path(path)
         check_format(path.suffix.lstrip(".").lower(), key="path")
-        check_out(path, force=force, key="path")
+        check_out(path, force=force, key="path", folder=False)
         from casadi_posture.output.animation import write_animation  # imported when drawn
 
         return write_animation(self.result, path)
@@ -549,10 +550,11 @@ def _problem_file(
     return str(path), dict(problem.overrides) | dict(overrides or {})
 
 
-def check_out(out: Path, *, force: bool, key: str = "--out") -> None:
-    """The rule for every output: a new or empty folder (or a new file), unless ``force``;
-    never the current folder or one that holds it."""
-    check_out_name(out, key)
+def check_out(out: Path, *, force: bool, key: str = "--out", folder: bool = True) -> None:
+    """The rule for every output: a new or empty folder (or, not ``folder``, a new file),
+    unless ``force``; never the current folder or one that holds it; a path the file system
+    lets us write."""
+    check_out_name(out, key, folder=folder)
     if force or not out.exists():
         return
     if out.is_dir() and not any(out.iterdir()):
@@ -560,8 +562,10 @@ def check_out(out: Path, *, force: bool, key: str = "--out") -> None:
     raise ProblemError(out, key, MISSING, "a new or empty output, or --force to overwrite it")
 
 
-def check_out_name(out: Path, key: str = "--out") -> None:
-    """An output is never the current folder or one that holds it."""
+def check_out_name(out: Path, key: str = "--out", *, folder: bool = True) -> None:
+    """An output is never the current folder or one that holds it, and is a ``folder`` (else
+    a file) the file system lets us write (``check_writable``)."""
+    check_writable(out, key, folder=folder)
     here = Path.cwd().resolve()
     if str(out) in ("", ".") or out.resolve() in (here, *here.parents):
         expected = "a folder or file name (not the current folder or one that holds it)"

@@ -53,6 +53,11 @@ class _Commands(click.Group):
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             ctx.exit(1)
         except Exception as error:  # a bug: one line for the user, the traceback on request
+            if isinstance(error, OSError) and error.filename is not None:
+                # the file system refused a path after the checks before the run (a disk
+                # that filled up, a folder removed meanwhile): the path and its reason
+                click.echo(f"error: {error.filename}: {error.strerror}", err=True)
+                ctx.exit(2)
             if os.environ.get(DEBUG):
                 raise
             first = (str(error).splitlines() or [""])[0]

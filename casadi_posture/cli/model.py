@@ -58,7 +58,7 @@ def init(template_or_file: str, file: Path | None, force: bool) -> None:
     name, target = (template_or_file, file) if file else ("hold", Path(template_or_file))
     if name not in TEMPLATES:
         raise ProblemError(None, "TEMPLATE", name, f"one of {sorted(TEMPLATES)}")
-    api.check_out(target, force=force, key="FILE")
+    api.check_out(target, force=force, key="FILE", folder=False)
     if not target.parent.is_dir():
         raise ProblemError(None, "FILE", str(target), "a file in an existing folder")
     target.write_text(template(name), encoding="utf-8")

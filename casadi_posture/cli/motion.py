@@ -24,6 +24,7 @@ from casadi_posture.cli.durations import TIME
 from casadi_posture.cli.runs import echo_files, report_recording, write_run
 from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.output.report import table
+from casadi_posture.output.writable import check_writable
 from casadi_posture.runs.prediction import (
     PREDICTED,
     SHOWN_DOFS,
@@ -147,6 +148,8 @@ def evaluate(
         read_s = time.perf_counter() - started
         out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
         api.check_out(out, force=force)
+        if compare:
+            check_writable(out / PREDICTED, "--out")
         clear_prediction(out)  # an earlier evaluation's comparison, not this one's
         run = api.evaluate(resolved, recording)
         shown = functools.partial(report_recording, run, law(resolved), show_all, read_s=read_s)

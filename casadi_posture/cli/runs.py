@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -40,6 +39,8 @@ from casadi_posture.output.results import SHOWN_RECOVERIES
 from casadi_posture.output.run_files import MOST_WORKERS, Writers, default_workers
 from casadi_posture.output.run_files import write_run as files_of_run
 from casadi_posture.output.scores import run_lines
+from casadi_posture.output.writable import check_writable
+from casadi_posture.runs.manifest import RecordingRead, read_manifest
 from casadi_posture.runs.whatif import MAX_CASES
 from casadi_posture.static import law
 
@@ -184,30 +185,28 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
       casadi-posture rerun out/simulate/holding_m45-active-lexicographic/manifest.json
     """
     path = Path(manifest)
-    record = _manifest(path)
+    record = read_manifest(path)
     out = out or path.parent.with_name(path.parent.name + "-rerun")
+    check_writable(out)  # before resolving it: a loop of symbolic links does not resolve
     if out.resolve() == path.parent.resolve():  # it would be compared with itself
         expected = "a folder apart from the manifest's (the rerun is compared with it)"
         raise ProblemError(None, "--out", str(out), expected)
     with interrupt.deferred():
         api.check_out(out, force=force)
         try:
-            resolved = api.from_dict(record["problem_data"], record["problem_path"])
+            resolved = api.from_dict(record.problem_data, record.problem_path)
         except ProblemError as error:
             if error.key is None:
                 raise ProblemError(path, "problem_data", MISSING, error.expected) from None
             key = f"problem_data.{error.key}"
             raise ProblemError(path, key, error.value, error.expected) from None
-        recording = record.get("recording")
+        recording = record.recording
         with Writers(_workers(None), resolved) as writers:
             if recording is None:
-                run = api.simulate(resolved, record["solver"])
+                run = api.simulate(resolved, record.solver)
             else:
-                options = ("solver", "between_s", "resample_s", "repeat_times", "until_s")
-                read_with = {k: recording.get(k) for k in options}
-                if read_with["between_s"] is not None:
-                    read_with["between_s"] = tuple(read_with["between_s"])
-                run = api.evaluate(resolved, _recording(path, recording), **read_with)
+                options = recording.options()
+                run = api.evaluate(resolved, _recording(path, recording), **options)
             report = _report if recording is None else report_recording
             shown = functools.partial(report, run, law(resolved))
             files, code = write_run(run, out, command_line(), shown, writers=writers)
@@ -221,36 +220,17 @@ def rerun(manifest: str, out: Path | None, force: bool) -> None:
     raise SystemExit(code or (0 if same else 1))
 
 
-def _recording(path: Path, recorded: dict[str, Any]) -> Path:
+def _recording(path: Path, recorded: RecordingRead) -> Path:
     """The motion file an evaluate manifest (``path``) records, as it was: a file that is
     gone or has changed since is a one-line error."""
-    source = Path(recorded["source"])
+    source = Path(recorded.source)
     if not source.is_file():
         raise ProblemError(path, "recording.source", str(source), "the recording, still there")
     sha256 = hashlib.sha256(source.read_bytes()).hexdigest()
-    if sha256 != recorded["sha256"]:
-        expected = (
-            f"the recording as it was (SHA-256 {recorded['sha256'][:12]}…, now {sha256[:12]}…)"
-        )
+    if sha256 != recorded.sha256:
+        expected = f"the recording as it was (SHA-256 {recorded.sha256[:12]}…, now {sha256[:12]}…)"
         raise ProblemError(path, "recording.source", str(source), expected)
     return source
-
-
-def _manifest(path: Path) -> dict[str, Any]:
-    """A manifest's data; a file that is not one is a one-line error."""
-    try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ProblemError(path, None, None, "the file does not exist") from None
-    except (OSError, UnicodeDecodeError, ValueError) as error:
-        raise ProblemError(path, None, None, f"a manifest.json ({error})") from None
-    missing = [k for k in ("problem_data", "problem_path", "solver") if k not in record]
-    if not isinstance(record, dict) or missing:
-        raise ProblemError(path, None, None, "a manifest.json written by simulate")
-    recording = record.get("recording")
-    if recording is not None and not {"source", "sha256", "solver"} <= set(recording):
-        raise ProblemError(path, "recording", MISSING, "a manifest.json written by evaluate")
-    return record
 
 
 def write_run(
