@@ -11,11 +11,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import PROBLEMS
 
 import casadi_posture as cp
 from casadi_posture.biomech.fatigue import fatigue_model
 from casadi_posture.cli import main
-from casadi_posture.problem import Problem, problem_from_data
+from casadi_posture.problem import Problem, load_problem, problem_from_data
 from casadi_posture.sensitivity_analysis.analysis import Sensitivity, sensitivity
 from casadi_posture.sensitivity_analysis.parametric import Input, ParametricProblem
 from casadi_posture.sensitivity_analysis.posture import posture_derivative
@@ -256,3 +257,20 @@ def test_the_command_exits_1_on_a_flagged_answer() -> None:
     )
     assert done.exit_code == 1
     assert "FLAGGED" in done.output
+
+
+def test_an_ik_answer_that_is_not_a_solution_is_held_fixed_and_keeps_its_own_numbers() -> None:
+    """1000 kg on the seated assembly: the nullspace solver stalls, and polishing its answer
+    moves a wrist by 8°; the derivatives are those of the answer's own posture (held fixed,
+    flagged), and its compression is the static answer's (it was an internal error)."""
+    problem = load_problem(PROBLEMS / "seated_assembly.toml", {"loads[0].mass_kg": 1000.0})
+    result = sensitivity(problem)
+    answer = solve_static(problem, None)
+    assert not answer.ik.success
+    assert result.compression == pytest.approx(answer.low_back.compression, rel=1e-12)
+    assert np.array_equal(result.posture.q, answer.torques.q)
+    held = [f for f in result.flags if f.startswith("derivatives hold the posture fixed")]
+    assert held == [
+        "derivatives hold the posture fixed: the IK's answer is not a solution (polishing it "
+        "moved wrist_flexion_l by 8.01°)"
+    ]

@@ -23,11 +23,16 @@ from casadi_posture.biomech.low_back import MODEL
 from casadi_posture.problem import Problem
 from casadi_posture.sensitivity_analysis.parametric import Input, ParametricProblem
 from casadi_posture.sensitivity_analysis.posture import PostureDerivative, posture_derivative
-from casadi_posture.static import StaticAnswer
+from casadi_posture.static import StaticAnswer, low_back
 from casadi_posture.static import solve as solve_static
 
 #: The parametric graph must reproduce the problem's own torques to this [N·m].
 CONSISTENCY = 1e-8
+#: Polishing a converged IK answer moves it by 1e-8 rad at most and leaves its optimality
+#: conditions at 1e-14 (the shipped problems); one that moves further [rad] or stays further
+#: off was not a solution, and the derivatives there are not the answer's.
+POLISHED_RAD = 1e-4
+POLISHED_STATIONARITY = 1e-6
 
 
 @dataclass(frozen=True)
@@ -188,7 +193,11 @@ def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
         )
         dq = np.zeros((problem.body.n, graph.values.size))
     else:
-        posture = posture_derivative(graph, answer.torques.q, [lv.achieved for lv in answer.levels])
+        with np.errstate(over="ignore", invalid="ignore"):  # a Newton step off to infinity
+            polished = posture_derivative(
+                graph, answer.torques.q, [lv.achieved for lv in answer.levels]
+            )
+        posture = _of_the_answer(polished, answer.torques.q, problem)
         dq = posture.dq
         if dq is None:
             flags.append(f"derivatives hold the posture fixed: {posture.note}")
@@ -219,7 +228,7 @@ def sensitivity(problem: Problem, solver: str | None = None) -> Sensitivity:
     value, by_q, by_theta, tau = (np.asarray(v) for v in function(q, graph.values))
     _check_consistency(problem, q, tau.ravel())
     compression = float(value[-1, 0]) if back else None
-    _check_compression(answer, compression)
+    _check_compression(problem, q, compression)
     total = by_theta + by_q @ dq
     m = loads.numel()
     groups = tuple(h.name for h in problem.body.half_joints)
@@ -276,9 +285,30 @@ def _check_consistency(problem: Problem, q: np.ndarray, tau: np.ndarray) -> None
         )
 
 
-def _check_compression(answer: StaticAnswer, compression: float | None) -> None:
-    """The graph's L5/S1 compression equals the answer's (a wrong graph fails loud)."""
-    own = None if answer.low_back is None else answer.low_back.compression
+def _of_the_answer(
+    posture: PostureDerivative, q0: np.ndarray, problem: Problem
+) -> PostureDerivative:
+    """``posture``, or, when polishing the IK's answer ``q0`` [rad] moved it further than
+    ``POLISHED_RAD`` or left its optimality conditions further off than
+    ``POLISHED_STATIONARITY`` (a solver that stopped short of a solution), the answer's own
+    posture held fixed, its note saying why."""
+    moved = np.abs(posture.q - q0)
+    if not np.all(np.isfinite(moved)) or moved.max(initial=0.0) > POLISHED_RAD:
+        k = int(np.argmax(np.where(np.isfinite(moved), moved, np.inf)))
+        why = f"polishing it moved {problem.body.dof_names[k]} by {math.degrees(moved[k]):.3g}°"
+    elif posture.stationarity > POLISHED_STATIONARITY:  # nan: not polished, the note says why
+        why = f"its optimality conditions are off by {posture.stationarity:.3g}"
+    else:
+        return posture
+    note = f"the IK's answer is not a solution ({why})"
+    return PostureDerivative(q0, None, posture.held, posture.kept, None, math.nan, note)
+
+
+def _check_compression(problem: Problem, q: np.ndarray, compression: float | None) -> None:
+    """The graph's L5/S1 compression equals the problem's own at ``q`` (a wrong graph fails
+    loud)."""
+    back = low_back(problem, q)
+    own = None if back is None else back.compression
     if (own is None) != (compression is None) or (
         own is not None and abs(own - compression) > CONSISTENCY * max(1.0, abs(own))
     ):
