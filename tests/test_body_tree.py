@@ -12,6 +12,9 @@ import pytest
 from conftest import PROBLEMS
 
 import casadi_posture as cp
+from casadi_posture.body.models import MODELS
+from casadi_posture.body.tree import REGIONS
+from casadi_posture.data.parameters import load
 from casadi_posture.errors import ProblemError
 from casadi_posture.problem import problem_from_data
 from casadi_posture.simulation import simulate
@@ -101,6 +104,15 @@ def test_a_region_without_data_takes_the_general_endurance_fit_and_says_so() -> 
     assert "endurance.frey_law_avin.general.b1" in records  # the pullers' default region
 
 
+def test_the_regions_are_those_with_endurance_data_and_those_the_built_in_bodies_use() -> None:
+    fitted = {name.split(".")[2] for name in load("endurance") if name.count(".") == 3}
+    bodies = {(p := cp.load(f)).spec.body.model: p.body for f in PROBLEMS.glob("*.toml")}
+    used = {h.region for body in bodies.values() for h in body.half_joints}
+    assert set(MODELS) <= set(bodies)  # every built-in body
+    assert fitted == set(REGIONS) - {"hip"}
+    assert used <= set(REGIONS) and "hip" in used
+
+
 @pytest.mark.parametrize(
     ("change", "key", "expected"),
     [
@@ -115,6 +127,12 @@ def test_a_region_without_data_takes_the_general_endurance_fit_and_says_so() -> 
         ({"negative": {"name": "toe_curlers"}}, "dofs[0].negative.strength_Nm", "shipped defaults"),
         ({"passive": {"model": "gymnast_fit"}}, "dofs[0].passive.model", "fitted only for"),
         ({"origin_m": [0.0, 0.0, 150.0]}, "body.tree.dofs[0].origin_m[2]", "unit slip"),
+        (
+            {"positive": {"name": "pushers", "strength_Nm": 40.0, "region": "moon"}},
+            "body.tree.dofs[0].positive.region = 'moon'",
+            "a joint region: one of ['general', 'shoulder', 'elbow', 'hand', 'trunk', 'hip', "
+            "'knee', 'ankle']",
+        ),
     ],
 )
 def test_a_faulty_tree_is_refused_naming_the_key(change: dict, key: str, expected: str) -> None:

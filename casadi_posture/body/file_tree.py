@@ -6,14 +6,15 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from casadi_posture.body.tree import BodyModel, Dof, Foot, Landmark, Segment
+from casadi_posture.body.tree import REGIONS, BodyModel, Dof, Foot, Landmark, Segment
 from casadi_posture.errors import ProblemError
 from casadi_posture.spec.schema import TreeSpec
 
 
 def check_tree(tree: TreeSpec, path: Path, key: str = "body.tree") -> None:
     """Refuse a tree whose names repeat or whose references point nowhere: parents defined
-    before their children, segments and landmarks carried by DOFs of the tree."""
+    before their children, segments and landmarks carried by DOFs of the tree, muscle
+    groups in a joint region of ``REGIONS``."""
     dofs: set[str] = set()
     for i, dof in enumerate(tree.dofs):
         where = f"{key}.dofs[{i}]"
@@ -26,11 +27,14 @@ def check_tree(tree: TreeSpec, path: Path, key: str = "body.tree") -> None:
     groups: set[str] = set()
     for i, dof in enumerate(tree.dofs):
         for side in ("positive", "negative"):
-            name = getattr(dof, side).name
+            name, region = getattr(dof, side).name, getattr(dof, side).region
             if name in groups:
                 raise ProblemError(
                     path, f"{key}.dofs[{i}].{side}.name", name, "a name no other half-joint has"
                 )
+            if region not in REGIONS:
+                expected = f"a joint region: one of {list(REGIONS)}"
+                raise ProblemError(path, f"{key}.dofs[{i}].{side}.region", region, expected)
             groups.add(name)
     tables = (("segments", tree.segments), ("landmarks", tree.landmarks), ("feet", tree.feet))
     for table, items in tables:

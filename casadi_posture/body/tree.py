@@ -32,6 +32,12 @@ def column(values: Sequence[float | ca.SX]) -> ca.DM | ca.SX:
     return ca.vertcat(*values)
 
 
+#: The joint regions a muscle group's endurance and recovery data are filed under: those
+#: with data of their own (Frey-Law & Avin's fits in data/endurance.toml) and the hip, whose
+#: groups take the general fit.
+REGIONS = ("general", "shoulder", "elbow", "hand", "trunk", "hip", "knee", "ankle")
+
+
 @dataclass(frozen=True)
 class Dof:
     """A revolute degree of freedom and its two half-joints (antagonistic muscle groups).
