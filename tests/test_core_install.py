@@ -79,7 +79,7 @@ def test_simulate_answers_as_the_full_install_does(run: Path, tmp_path: Path) ->
         (("solve", PROBLEMS / "standing_wall_horizontal.toml"), "solve.json"),
         (("whatif", HOLDING, "--vary", "loads[0].mass_kg=1,2", *SHORT), "whatif.csv"),
         (("batch", HOLDING, PROBLEMS / "holding_m25.toml", *SHORT), "summary.csv"),
-        (("duty-cycle", HOLDING, "--t-off", "30"), "duty_cycle.json"),
+        (("duty-cycle", HOLDING, "--t-off", "30", "--horizon", "10min"), "duty_cycle.json"),
         (("population", HOLDING, "--n", "1", "--jobs", "1"), "population.json"),
         (("sensitivity", HOLDING), "sensitivity.json"),
         (("compare", HOLDING), "compare.csv"),
