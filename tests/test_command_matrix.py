@@ -135,7 +135,9 @@ def test_grids_and_people(command: str, law: str, tmp_path: Path) -> None:
     adjustment = list(ADJUSTMENTS)[turn]
     options, written = GRIDS[command]
     problem = ADJUSTMENTS[adjustment][0]
-    cli(command, problem, *settings(law, None, adjustment), *options, "--out", tmp_path)
+    output = cli(command, problem, *settings(law, None, adjustment), *options, "--out", tmp_path)
     assert (tmp_path / written).is_file()
+    if command == "whatif":  # the law --set chose, not the file's
+        assert f"recovery law: {law}" in output
     for summary in tmp_path.rglob("summary.json"):
         made_by(summary, law, None)

@@ -40,6 +40,7 @@ from casadi_posture.output.run_files import MOST_WORKERS, Writers, default_worke
 from casadi_posture.output.run_files import write_run as files_of_run
 from casadi_posture.output.scores import run_lines
 from casadi_posture.output.writable import check_writable
+from casadi_posture.problem import load_problem
 from casadi_posture.runs.manifest import RecordingRead, read_manifest
 from casadi_posture.runs.whatif import MAX_CASES
 from casadi_posture.static import law
@@ -726,7 +727,7 @@ def whatif(
         rows.append([*line, row["flags"] or "-"])
     right = {headers.index(h) for h in ("task held (s)",) if h in headers}
     if not {"fatigue.recovery_law", "fatigue.load_threshold_pct_mvc"} & set(keys):
-        click.echo(f"recovery law: {law(problem_from(problem))}\n")
+        click.echo(f"recovery law: {law(load_problem(problem, parse_sets(sets, problem)))}\n")
     click.echo(table(headers, rows, digits=2, right=right))
     for row in sorted(report.rows, key=position):
         if row.get("notes"):
