@@ -153,6 +153,17 @@ def row(line: str, variant: str, run: cp.Simulation) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
+def paper_row(label: str, base: cp.Problem) -> str:
+    """The row of what the paper reports on the line ``label``, beside our dot."""
+    paper = next(text for name, _, text in LINES if name == label)
+    height, distance = (float(v) for v in wrist_position(base)(base.posture))
+    ours = f"our dot: {height:.2f} m high, {distance:.2f} m from the shoulder"
+    return (
+        f"| {label} | the paper (12 people) | {paper} ({ours}) | repeated | not given "
+        "| not given | |"
+    )
+
+
 HEADER = (
     "| line | law, strategy, kept levels | recovery positions: wrist height above the floor, "
     "distance from the shoulder (moved along the line; when) | cycles | held [min] "
@@ -170,17 +181,12 @@ def main(
     start = time.perf_counter()
     extra = {} if duration_s is None else {"simulation.duration_s": duration_s}
     rows = []
-    for label, stem, paper in lines:
+    for label, stem, _ in lines:
         base = cp.load(PROBLEMS / f"{stem}.toml")
         for name, keys in variants:
             problem = cp.from_dict(base.data, str(base.path), keys | extra)
             rows.append(row(label, name, cp.simulate(problem)))
-        height, distance = (float(v) for v in wrist_position(base)(base.posture))
-        ours = f"our dot: {height:.2f} m high, {distance:.2f} m from the shoulder"
-        rows.append(
-            f"| {label} | the paper (12 people) | {paper} ({ours}) | repeated | not given "
-            "| not given | |"
-        )
+        rows.append(paper_row(label, base))
     print(HEADER)
     print("\n".join(rows))
     print(f"\nwall time {time.perf_counter() - start:.0f} s")

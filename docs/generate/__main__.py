@@ -1,0 +1,85 @@
+"""``python -m docs.generate check|update [DOCUMENT ...]``: regenerate every region of the
+documents (README.md and docs/*.md by default); ``check`` prints a unified diff of each
+region that drifted and exits 1, ``update`` rewrites them."""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import sys
+import time
+from pathlib import Path
+
+from .generators import GENERATORS, render, same
+from .regions import RegionError, find_regions, replace_bodies
+from .session import ROOT, Session
+
+
+def documents() -> list[Path]:
+    """The README and every page of docs/."""
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def process(path: Path, update: bool) -> tuple[int, list[str], list[str]]:
+    """Regenerate the regions of ``path`` (rewritten in place when ``update``); returns
+    the number of regions and the reports of those that drifted and those that failed."""
+    text = path.read_text()
+    shown = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+    regions = find_regions(shown, text)
+    drifted, failed, bodies = [], [], []
+    session = Session()
+    try:
+        for region in regions:
+            if region.name not in GENERATORS:
+                raise RegionError(f"{region.where}: no generator named {region.name!r}")
+            try:
+                fresh = render(region, session)
+            except Exception as error:  # a broken generator is reported with its region
+                failed.append(f"{region.where}: {region.name} failed: {error!r}")
+                bodies.append(region.body)
+                continue
+            if same(region, fresh):
+                bodies.append(region.body)
+                continue
+            bodies.append(fresh)
+            diff = difflib.unified_diff(
+                region.body.splitlines(keepends=True),
+                fresh.splitlines(keepends=True),
+                f"{region.where} (the document)",
+                f"{region.where} ({region.name}, today)",
+            )
+            drifted.append(f"{region.where}: region {region.name!r} drifted\n{''.join(diff)}")
+    finally:
+        session.close()
+    if update and bodies != [r.body for r in regions]:
+        path.write_text(replace_bodies(text, regions, bodies))
+    return len(regions), drifted, failed
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Check or update; the exit code is 1 when a region drifted (check) or failed."""
+    parser = argparse.ArgumentParser(prog="python -m docs.generate", description=__doc__)
+    parser.add_argument("action", choices=("check", "update"))
+    parser.add_argument("documents", nargs="*", type=Path)
+    options = parser.parse_args(argv)
+    start = time.perf_counter()
+    paths = [p.resolve() for p in options.documents] or documents()
+    drifted, failed, count = 0, 0, 0
+    for path in paths:
+        try:
+            regions, drifts, failures = process(path, options.action == "update")
+        except RegionError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
+        print("\n".join([*drifts, *failures]), end="\n" if drifts or failures else "")
+        count, drifted, failed = count + regions, drifted + len(drifts), failed + len(failures)
+    verb = "rewritten" if options.action == "update" else "drifted"
+    print(
+        f"{count} generated regions in {len(paths)} documents: {drifted} {verb}, "
+        f"{failed} failed ({time.perf_counter() - start:.0f} s)"
+    )
+    return 1 if failed or (drifted and options.action == "check") else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

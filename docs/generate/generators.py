@@ -1,0 +1,56 @@
+"""The generators by name, and how a region's text is made and compared."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from . import console, paper_arm, python_output, runs, wall
+from .regions import Region
+from .session import Session
+
+
+@dataclass(frozen=True)
+class Generator:
+    """``make(region, session)`` returns the region's text, or the values its template
+    names; text matching ``volatile`` (timings) is not compared."""
+
+    make: Callable[[Region, Session], str | Mapping[str, Any]]
+    volatile: re.Pattern[str] | None = None
+
+
+GENERATORS: dict[str, Generator] = {
+    "console": Generator(console.generate, console.TIMINGS),
+    "python-output": Generator(python_output.generate),
+    "holding-laws": Generator(paper_arm.laws_table),
+    "paper-arm": Generator(paper_arm.values),
+    "wall-table": Generator(wall.table),
+    "wall-example": Generator(wall.example_table),
+    "wall": Generator(wall.values),
+    "summary": Generator(runs.summary),
+    "simulate": Generator(runs.simulate),
+    "solve": Generator(runs.solve),
+    "table": Generator(runs.table),
+}
+
+
+def render(region: Region, session: Session) -> str:
+    """The region's text as its generator makes it today (ending with a newline)."""
+    made = GENERATORS[region.name].make(region, session)
+    if region.template is not None:
+        if isinstance(made, str):
+            raise TypeError(f"generator {region.name!r} writes text, not a template's values")
+        made = region.template.format_map(made)
+    elif not isinstance(made, str):
+        raise TypeError(f"generator {region.name!r} gives values: its marker needs a template")
+    return made.rstrip("\n") + "\n"
+
+
+def same(region: Region, text: str) -> bool:
+    """Whether ``text`` says what the region says, timings aside."""
+    volatile = GENERATORS[region.name].volatile
+    if volatile is None:
+        return text == region.body
+    return volatile.sub("<timing>", text) == volatile.sub("<timing>", region.body)

@@ -1,0 +1,78 @@
+"""The values of one run, for the prose beside a console block or a Python example:
+``summary file=PATH`` reads a ``summary.json`` the document's own commands wrote, ``table
+file=PATH`` a CSV table they wrote;
+``simulate problem=PATH set='KEY=VALUE;...'`` and ``solve problem=PATH`` run a problem of
+the document's working folder."""
+
+from __future__ import annotations
+
+import csv
+import json
+from typing import Any
+
+import casadi_posture as cp
+
+from .regions import Region
+from .session import Session
+
+
+def with_asymmetry(summary: dict[str, Any]) -> dict[str, Any]:
+    """The summary's keys and ``asymmetry_deg``: the largest left/right difference of its
+    key postures [deg] (None for a task that is not mirror-symmetric)."""
+    apart = [p["asymmetry_deg"] for p in summary["plausibility"]["postures"] if p["asymmetry_deg"]]
+    return summary | {"asymmetry_deg": max(apart, default=None)}
+
+
+def summary(region: Region, session: Session) -> dict[str, Any]:
+    """A ``summary.json`` of the working folder (``file=``), :func:`with_asymmetry`."""
+    return with_asymmetry(json.loads((session.folder / region.args["file"]).read_text()))
+
+
+def number(cell: str) -> float | str:
+    """A CSV cell as a number where it is one."""
+    try:
+        return float(cell)
+    except ValueError:
+        return cell
+
+
+def table(region: Region, session: Session) -> dict[str, Any]:
+    """A CSV table of the working folder (``file=``): ``rows``, each a dict by column."""
+    with (session.folder / region.args["file"]).open(newline="") as handle:
+        rows = [{k: number(v) for k, v in row.items()} for row in csv.DictReader(handle)]
+    return {"rows": rows}
+
+
+def overrides(text: str) -> dict[str, Any]:
+    """``'a=1;b.c=x'`` → ``{"a": 1, "b.c": "x"}`` (values read as JSON where they parse)."""
+    found: dict[str, Any] = {}
+    for item in filter(None, text.split(";")):
+        key, _, value = item.partition("=")
+        try:
+            found[key] = json.loads(value)
+        except json.JSONDecodeError:
+            found[key] = value
+    return found
+
+
+def problem(region: Region, session: Session) -> cp.Problem:
+    """The region's ``problem=`` of the working folder, with its ``set=`` keys."""
+    return cp.load(session.folder / region.args["problem"], overrides(region.args.get("set", "")))
+
+
+def simulate(region: Region, session: Session) -> dict[str, Any]:
+    """The problem simulated: its summary (:func:`with_asymmetry`) and ``at``, each whole
+    second's timeline row by its time [s] (``{at[90][shoulder_flexion_deg]:.1f}``)."""
+    run = cp.simulate(problem(region, session))
+    frame = run.to_frame()
+    rows = frame[frame["time_s"] == frame["time_s"].round()]
+    return with_asymmetry(run.summary()) | {
+        "at": {int(row["time_s"]): row for row in rows.to_dict("records")}
+    }
+
+
+def solve(region: Region, session: Session) -> dict[str, Any]:
+    """The problem's posture solved: ``groups``, each half-joint's row of
+    :meth:`to_frame` by name (strength and torque [N·m], load [%MVC], endurance [min])."""
+    frame = cp.solve(problem(region, session)).to_frame().set_index("name")
+    return {"groups": frame.to_dict("index")}
