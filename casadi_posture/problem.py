@@ -45,7 +45,7 @@ from casadi_posture.errors import MISSING, ProblemError
 from casadi_posture.ik.hierarchy import TaskHierarchy
 from casadi_posture.ik.tasks import Task as IKTask
 from casadi_posture.ik.tasks import tasks_from_specs
-from casadi_posture.spec.overrides import apply, changes
+from casadi_posture.spec.overrides import MAX_NESTING, apply, changes, check_nesting
 from casadi_posture.spec.schema import (
     ComfortTask,
     ComTask,
@@ -193,9 +193,9 @@ def problem_from_data(
     """Validate and resolve a problem given as plain data (what a problem file holds, as a
     dict); ``name`` names it in messages; ``overrides`` as for ``load_problem``."""
     path = Path(name)
-    _check_nesting(data, path)
+    check_nesting(data, path)
     raw = apply(dict(data), overrides or {}, path)
-    _check_nesting(raw, path)  # the overrides' values too
+    check_nesting(raw, path)  # the overrides' values too
     try:
         spec = ProblemSpec.model_validate(raw)
     except ValidationError as error:
@@ -213,29 +213,6 @@ def problem_from_data(
 #: Overrides a title names (``Problem.heading``); the page's subtitle and the manifest
 #: hold them all.
 MOST_CHANGES = 4
-
-#: Tables and arrays nested deeper than this are refused before validation.
-MAX_NESTING = 16
-
-
-def _check_nesting(raw: Any, path: Path) -> None:
-    """Refuse data nested deeper than ``MAX_NESTING`` (iteratively: no recursion to exhaust)."""
-    stack = [(raw, 0, "")]
-    while stack:
-        node, depth, key = stack.pop()
-        if depth > MAX_NESTING:
-            expected = f"tables and arrays nested at most {MAX_NESTING} deep"
-            raise ProblemError(path, key or None, MISSING, expected)
-        items = (
-            node.items()
-            if isinstance(node, dict)
-            else enumerate(node)
-            if isinstance(node, list)
-            else ()
-        )
-        for name, child in items:
-            part = f"[{name}]" if isinstance(name, int) else (f".{name}" if key else name)
-            stack.append((child, depth + 1, key + part))
 
 
 def resolve(spec: ProblemSpec, path: Path) -> Problem:

@@ -13,7 +13,7 @@ from copy import deepcopy
 from pathlib import Path
 from typing import Any
 
-from casadi_posture.errors import ProblemError
+from casadi_posture.errors import MISSING, ProblemError
 
 _TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
 
@@ -53,16 +53,43 @@ def split_assignment(text: str, option: str, path: Any, example: str) -> tuple[s
 
 def parse_value(text: str, path: Any = None, key: str = "--set") -> Any:
     """A value as TOML reads it (``5``, ``2.5``, ``true``, ``[0, 1]``); otherwise the string.
-    Arrays or tables nested too deep to read are a ``ProblemError`` naming ``key`` (the
-    option) and ``path`` (the problem file)."""
+    Arrays or tables nested deeper than ``MAX_NESTING`` are a ``ProblemError`` naming ``key``
+    (the option) and ``path`` (the problem file)."""
     try:
-        return tomllib.loads(f"v = {text}")["v"]
+        value = tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
         return text
     except RecursionError:
         raise ProblemError(
             path, key, text, "a value with arrays or tables less deeply nested"
         ) from None
+    check_nesting(value, path, key)
+    return value
+
+
+#: Tables and arrays nested deeper than this are refused before validation.
+MAX_NESTING = 16
+
+
+def check_nesting(raw: Any, path: Any, key: str = "") -> None:
+    """Refuse data nested deeper than ``MAX_NESTING``, naming the deepest key below ``key``
+    (iteratively: no recursion to exhaust)."""
+    stack = [(raw, 0, key)]
+    while stack:
+        node, depth, key = stack.pop()
+        if depth > MAX_NESTING:
+            expected = f"tables and arrays nested at most {MAX_NESTING} deep"
+            raise ProblemError(path, key or None, MISSING, expected)
+        items = (
+            node.items()
+            if isinstance(node, dict)
+            else enumerate(node)
+            if isinstance(node, list)
+            else ()
+        )
+        for name, child in items:
+            part = f"[{name}]" if isinstance(name, int) else (f".{name}" if key else name)
+            stack.append((child, depth + 1, key + part))
 
 
 #: The keys that set a muscle group's strength, one at a time: an override of one of them
