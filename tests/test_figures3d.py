@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from conftest import PROBLEMS
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
 from matplotlib.path import Path as Outline
 from PIL import Image
@@ -328,3 +329,29 @@ def test_figures_give_time_in_minutes_only_past_five_minutes() -> None:
     assert time_unit(np.array([0.0, 5.78])) == (1.0, "s")
     assert time_unit(np.array([0.0, 300.0])) == (1.0, "s")
     assert time_unit(np.array([10.0, 311.0])) == (60.0, "min")
+
+
+def test_a_frame_drawn_over_the_first_is_the_whole_figure_drawn_again(
+    wall: cp.api.Simulation,
+) -> None:
+    """The animation's frames paint only what moves over the first draw: each is, pixel
+    for pixel, the figure drawn whole, but where the time cursor crosses the fatigue
+    strip's frame (the whole draw puts the frame over it)."""
+    result = wall.result
+    on = int(np.argmax(result.timeline.owner >= 0))
+    frames = animation._Frames(result, [0, on, result.timeline.time.size - 1])
+    canvas = FigureCanvasAgg(frames.fig)
+    for step in (0, on, result.timeline.time.size - 1):
+        frames.draw(step)
+        canvas.draw()
+        moved = np.asarray(canvas.buffer_rgba()).copy()
+        for artist in frames.fig.moving:
+            artist.set_animated(False)
+        animation.Figure.draw(frames.fig, canvas.get_renderer())
+        whole = np.asarray(canvas.buffer_rgba())
+        apart = np.flatnonzero(np.abs(moved.astype(int) - whole).sum(axis=2).any(axis=0))
+        cursor = frames.cursor.get_transform().transform((frames.cursor.get_xdata()[0], 0))[0]
+        assert np.all(np.abs(apart - cursor) <= 2), (step, apart)
+        for artist in frames.fig.moving:
+            artist.set_animated(True)
+    plt.close(frames.fig)
