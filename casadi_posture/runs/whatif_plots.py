@@ -114,7 +114,7 @@ def plot_outcomes(
             note = f"lines drawn {SCORE_OFFSET:g} apart where they coincide"
             fig.text(0.01, 0.005, note, fontsize=6, color="0.4")
         if not _numeric(values):
-            ax.set_xticks(range(len(values)), [str(v) for v in values])
+            ax.set_xticks(range(len(values)), [_short(str(v)) for v in values])
         ax.set_xlabel(with_unit(*labels[axis]))
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
@@ -185,8 +185,17 @@ def _limits(ax: Axes, outcome: str) -> None:
 def _given(label: tuple[str, str], value: Any) -> str:
     """An axis and its value in a legend: ``box right/left half mass = 2 kg``."""
     words, unit = label
-    shown = f"{value:g}" if isinstance(value, float) else str(value)
+    shown = f"{value:g}" if isinstance(value, float) else _short(str(value))
     return f"{words} = {shown}" + (f" {unit}" if unit else "")
+
+
+#: The most characters a value shows on a figure (a title of thousands does not fit).
+SHOWN_CHARACTERS = 30
+
+
+def _short(text: str) -> str:
+    """``text`` as a figure shows it: cut to ``SHOWN_CHARACTERS``, ending in … if cut."""
+    return text if len(text) <= SHOWN_CHARACTERS else text[: SHOWN_CHARACTERS - 1] + "…"
 
 
 def _in_group(row: dict[str, Any], others: Sequence[tuple[str, list[Any]]], group: tuple) -> bool:
