@@ -11,7 +11,7 @@ M R M with M = diag(1, -1, 1).
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -30,31 +30,12 @@ from casadi_posture.ik.tasks import (
     Position,
     Task,
 )
+from casadi_posture.spec.sides import mirror_name
 
 #: Numbers that agree to this many decimals (m, N, N·m, rad, or a unit vector's
 #: components) are taken as equal.
 DECIMALS = 6
 _M = np.diag([1.0, -1.0, 1.0])
-
-
-def mirror_name(name: str | None) -> str | None:
-    """``name`` with its side suffix swapped (``_r`` ↔ ``_l``); unchanged without one."""
-    if name is None:
-        return None
-    for side, other in (("_r", "_l"), ("_l", "_r")):
-        if name.endswith(side):
-            return name[: -len(side)] + other
-    return name
-
-
-def sided_pairs(names: Iterable[str]) -> list[tuple[str, str]]:
-    """(right, left) pairs among ``names``: each ``_r`` name whose mirror is there too."""
-    given = set(names)
-    return sorted(
-        (name, other)
-        for name in given
-        if name.endswith("_r") and (other := mirror_name(name)) in given and other is not None
-    )
 
 
 def paired(body: BodyModel) -> list[tuple[int, int]]:

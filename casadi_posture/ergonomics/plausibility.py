@@ -17,8 +17,9 @@ import numpy as np
 from casadi_posture.body.loads import Load
 from casadi_posture.body.tree import BodyModel
 from casadi_posture.data import parameters
-from casadi_posture.ergonomics.mirror import asymmetry, lateral, sided_pairs, symmetric
+from casadi_posture.ergonomics.mirror import asymmetry, lateral, symmetric
 from casadi_posture.ik.tasks import Gaze, Line, Orientation, Plane, Position, Task
+from casadi_posture.spec.sides import sided_pairs
 
 
 def _value(name: str) -> float:

@@ -11,8 +11,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from casadi_posture.data import parameters
-from casadi_posture.ergonomics.mirror import sided_pairs
 from casadi_posture.spec.schema import BodySpec, LoadSpec, PositionTask, ProblemSpec, Task
+from casadi_posture.spec.sides import sided_pairs
 
 #: One pound [kg] (exact, by definition).
 POUND_KG = 0.45359237
