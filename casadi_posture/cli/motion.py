@@ -135,6 +135,10 @@ def evaluate(
         if compare and not resolved.spec.tasks:
             expected = "at least one task to predict a posture from (--compare-prediction)"
             raise ProblemError(resolved.path, "tasks", MISSING, expected)
+        out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
+        api.check_out(out, force=force)  # before reading: a C3D file's IK takes a while
+        if compare:
+            check_writable(out / PREDICTED, "--out")
         started = time.perf_counter()
         recording = api.read_motion(
             resolved,
@@ -146,10 +150,6 @@ def evaluate(
             until_s=until_s,
         )
         read_s = time.perf_counter() - started
-        out = out or Path("out", "evaluate", f"{Path(problem).stem}-{motion.stem}")
-        api.check_out(out, force=force)
-        if compare:
-            check_writable(out / PREDICTED, "--out")
         clear_prediction(out)  # an earlier evaluation's comparison, not this one's
         run = api.evaluate(resolved, recording)
         shown = functools.partial(report_recording, run, law(resolved), show_all, read_s=read_s)
