@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from conftest import PROBLEMS
 
+import casadi_posture as cp
+from casadi_posture.ik import solvers
 from casadi_posture.ik.solvers import SOLVER_NAMES, cached_solver, make_solver, structure_key
 from casadi_posture.problem import load_problem
 
@@ -39,3 +41,16 @@ def test_a_cached_solver_answers_like_a_fresh_one_on_other_targets(name: str) ->
     fresh = make_solver(name, second).solve(problem.posture)
     again = reused.solve(problem.posture)
     assert np.array_equal(again.q, fresh.q) and again.iterations == fresh.iterations
+
+
+def test_a_solve_then_a_simulation_in_one_process_answer_as_each_alone() -> None:
+    """The frontal elbow's one-DOF line: solve builds its solver for a hierarchy of 1
+    parameter, the simulation's has 13 that its residuals partly ignore; both had one
+    structure key, and the simulation reused the solve's solver (a ValueError in
+    cp.simulate after cp.solve, and in every in-process caller)."""
+    problem = load_problem(PROBLEMS / "strategy_frontal_elbow.toml", {"simulation.duration_s": 60})
+    solvers._cache.__dict__.pop("solvers", None)
+    alone = cp.simulate(problem).summary()
+    solvers._cache.__dict__.pop("solvers", None)
+    cp.solve(problem)
+    assert cp.simulate(problem).summary() == alone

@@ -66,15 +66,19 @@ _cache = threading.local()
 
 def structure_key(hierarchy: TaskHierarchy) -> str:
     """A hierarchy's structure: the SHA-256 of its compiled residual and Jacobian function's
-    fingerprint (its sizes, sparsity and instruction count, and its values at one fixed
-    pseudo-random point, which differ for another geometry, other masses or other kinds of
-    task, never for other targets, the function's parameters) and of the joint ranges (which
-    the solvers build in). Two functions agreeing at a random point are the same function
+    fingerprint (its sizes, its number of parameters, sparsity and instruction count, and
+    its values at one fixed pseudo-random point, which differ for another geometry, other
+    masses or other kinds of task, never for other targets, the function's parameters) and
+    of the joint ranges (which the solvers build in). Two functions agreeing at a random point are the same function
     but with probability zero; serialising the function instead costs 0.07 s at 29 DOF."""
     body, f = hierarchy.body, hierarchy.function
     rng = np.random.default_rng(_FINGERPRINT_SEED)
     values = f(rng.uniform(-1.0, 1.0, body.n), rng.uniform(-1.0, 1.0, hierarchy.p.numel()))
-    digest = hashlib.sha256(f"{f.n_instructions()} {hierarchy.sizes}".encode())
+    # the parameters' number too: a function may ignore some (a solver built for one target
+    # then read 13 of a hierarchy's)
+    digest = hashlib.sha256(
+        f"{f.n_instructions()} {hierarchy.sizes} {hierarchy.p.numel()}".encode()
+    )
     for value in values:
         digest.update(np.asarray(value.sparsity().get_triplet()).tobytes())
         digest.update(np.asarray(value.nonzeros()).tobytes())
