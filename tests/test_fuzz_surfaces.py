@@ -15,12 +15,14 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import pytest
 from click.testing import CliRunner, Result
 from conftest import PROBLEMS
+from fuzzing import Case, cases, run_case
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -295,3 +297,32 @@ def test_a_region_is_one_the_data_knows_or_is_refused_naming_them(region: str) -
         result = CliRunner().invoke(main, ["validate", str(problem)])
         check(result, str(problem), f"region = '{region}'", str(list(REGIONS)))
         assert (result.exit_code == 0) == (region in REGIONS)
+
+
+# --- a file validate accepts, through the commands --------------------------------------
+
+#: Commands run one after the other in one process on a file ``validate`` accepts.
+SEQUENCE = [
+    ("describe", ()),
+    ("torques", ()),
+    ("solve", ()),
+    ("simulate", ("--duration", "10")),
+    ("sensitivity", ()),
+    ("compare", ()),
+]
+
+
+@fuzzed(20)
+@given(case=cases())
+def test_a_file_validate_accepts_never_crashes_a_command(case: Case) -> None:
+    """One process, as a Python session or a batch worker runs them: a solver cached by one
+    command must serve the next (``solve`` then ``simulate`` once crashed)."""
+    with tempfile.TemporaryDirectory() as name:
+        problem = Path(name) / "fuzzed.toml"
+        problem.write_text(case.text)
+        if CliRunner().invoke(main, ["validate", str(problem)]).exit_code != 0:
+            return
+        for command, options in SEQUENCE:
+            with tempfile.TemporaryDirectory() as folder:
+                ran = run_case(replace(case, command=command, options=options), Path(folder))
+            assert not ran.problems, (case.source, case.mutations, command, ran.problems)
