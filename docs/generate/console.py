@@ -10,6 +10,7 @@ dropped columns becomes one ``...`` column).
 
 from __future__ import annotations
 
+import itertools
 import re
 import shlex
 
@@ -19,7 +20,9 @@ from .regions import Region
 from .session import Session
 
 #: Wall-clock figures in what the commands print: compared as equal whatever their value.
-TIMINGS = re.compile(r"\d+(?:\.\d+)? ms\b|\d+(?:\.\d+)? s wall|\d+ % in IK")
+TIMINGS = re.compile(
+    r"\d+(?:\.\d+)? ms\b|\d+(?:\.\d+)? s wall|\d+ % in IK|(?<=iterations, )\d+(?:\.\d+)? s\b"
+)
 
 ELIDED = "..."
 
@@ -71,6 +74,13 @@ def shorten(output: str, keep: str | None, cut: str | None) -> list[str]:
     return shown
 
 
+def in_table(line: str, spans: list[tuple[int, int]]) -> bool:
+    """Whether ``line`` is a row of the table whose columns span ``spans``: not blank, and
+    blank between the columns."""
+    gaps = [(a[1], b[0]) for a, b in itertools.pairwise(spans)]
+    return bool(line.strip()) and all(not line[start:end].strip() for start, end in gaps)
+
+
 def table_columns(lines: list[str], names: list[str]) -> list[str]:
     """``lines`` with every table among them cut to the columns whose header is in
     ``names``."""
@@ -82,7 +92,7 @@ def table_columns(lines: list[str], names: list[str]) -> list[str]:
             kept = [span for span in spans if line[span[0] : span[1]].strip() in names]
             if len(kept) != len(names):
                 raise ValueError(f"columns {names} not all in the table headed {line!r}")
-        elif not line.strip():
+        elif spans is not None and not in_table(line, spans):
             spans = None
         if spans is None:
             out.append(line)

@@ -61,7 +61,7 @@ def case_facts(elevation_deg: float, law: str, keep: int, strategy: str) -> dict
         "lost": lost_text(run),
         "postures": frame[["time_s", "shoulder_flexion_deg", "elbow_flexion_deg"]].to_numpy(),
         "end": at_the_end(run),
-        "t0": run.summary()["recovery_law"]["load_threshold_pct_mvc"],
+        "t0": run.summary()["recovery_law"].get("load_threshold_pct_mvc"),
     }
 
 
@@ -216,9 +216,9 @@ def explanation() -> dict[str, Any]:
         "shoulder_threshold_s": found[-45.0, "threshold", 0, "active"]["first_s"],
         "t0": found[-45.0, "threshold", 0, "active"]["t0"],
         "end": {label: found[e, "threshold", 0, "active"]["end"] for label, e in LINES},
-        "strategies": "identical in every one of these cases"
+        "strategies": "identical runs in every one of these cases"
         if not differ
-        else f"different in {len(differ)} of these cases",
+        else f"different runs in {len(differ)} of these cases",
         "elbow_limit_deg": math.degrees(m45.body.upper[m45.body.index["elbow_flexion"]]),
         "hysteresis": start_loads(lp),
         "curve": {name: first(with_the_curve(name)) for name in CURVE_FILES},

@@ -55,6 +55,11 @@ def overrides(text: str) -> dict[str, Any]:
     return found
 
 
+def listed(items: list[str]) -> str:
+    """'a, b and c'."""
+    return " and ".join([", ".join(items[:-1]), items[-1]] if len(items) > 1 else items)
+
+
 def problem(region: Region, session: Session) -> cp.Problem:
     """The region's ``problem=`` of the working folder, with its ``set=`` keys."""
     return cp.load(session.folder / region.args["problem"], overrides(region.args.get("set", "")))
@@ -62,12 +67,19 @@ def problem(region: Region, session: Session) -> cp.Problem:
 
 def simulate(region: Region, session: Session) -> dict[str, Any]:
     """The problem simulated: its summary (:func:`with_asymmetry`) and ``at``, each whole
-    second's timeline row by its time [s] (``{at[90][shoulder_flexion_deg]:.1f}``)."""
+    second's timeline row by its time [s] (``{at[90][shoulder_flexion_deg]:.1f}``),
+    ``at_end``, the last row, ``duration_min`` and ``recoveries_min``, the recoveries'
+    times [min] as text."""
     run = cp.simulate(problem(region, session))
     frame = run.to_frame()
     rows = frame[frame["time_s"] == frame["time_s"].round()]
     return with_asymmetry(run.summary()) | {
-        "at": {int(row["time_s"]): row for row in rows.to_dict("records")}
+        "at": {int(row["time_s"]): row for row in rows.to_dict("records")},
+        "at_end": frame.iloc[-1].to_dict(),
+        "duration_min": run.summary()["duration_s"] / 60,
+        "recoveries_min": listed(
+            [f"{p['time_s'] / 60:.1f}" for p in run.summary()["recovery_postures"]]
+        ),
     }
 
 

@@ -30,6 +30,14 @@ LABELS = {"horizontal": "0°", "m25": "−25°", "m45": "−45°"}
 #: active and passive with the constraint alone, active with the wrist kept on the line)
 #: by the names the templates use, in the example's order.
 VARIANTS = ("whole", "paper0", "paper0_passive", "paper2")
+#: Further runs of the paper's law on the horizontal line (active, the constraint alone):
+#: with the lexicographic solver alone, and with the comfort level's displacement term alone.
+CHECKS: dict[str, dict[str, Any]] = {
+    "paper0_lexicographic": {"solver.name": "lexicographic"},
+    "paper0_displacement": {"tasks[5].measure": "joint_displacement"},
+}
+#: A joint within this of a limit [deg] is at it.
+AT_LIMIT_DEG = 0.5
 
 
 @cache
@@ -46,7 +54,10 @@ def example() -> ModuleType:
 def run(line: str, variant: str) -> cp.Simulation:
     """One line's file under one variant, simulated for the file's duration."""
     base = cp.load(ROOT / "problems" / f"{LINES[line]}.toml")
-    keys = example().VARIANTS[VARIANTS.index(variant)][1]
+    if variant in CHECKS:
+        keys = example().VARIANTS[VARIANTS.index("paper0")][1] | CHECKS[variant]
+    else:
+        keys = example().VARIANTS[VARIANTS.index(variant)][1]
     return cp.simulate(cp.from_dict(base.data, str(base.path), keys))
 
 
@@ -63,7 +74,8 @@ def facts(line: str, variant: str) -> dict[str, Any]:
 @cache
 def all_facts() -> dict[tuple[str, str], dict[str, Any]]:
     """:func:`run_facts` of every line under every variant."""
-    return parallel.compute(run_facts, [(line, v) for line in LINES for v in VARIANTS])
+    cases = [(line, v) for line in LINES for v in VARIANTS]
+    return parallel.compute(run_facts, cases + [("horizontal", v) for v in CHECKS])
 
 
 def run_facts(line: str, variant: str) -> dict[str, Any]:
@@ -74,7 +86,10 @@ def run_facts(line: str, variant: str) -> dict[str, Any]:
     ``lost_group`` (None when held), ``thresholds`` (each half-joint's first time at the
     threshold [s], by its name), ``final_fatigue``, ``fallbacks``, ``steps``, and ``loads``
     of the right shoulder and elbow flexors [%MVC]: ``min`` and ``max`` over the run,
-    ``at_recoveries`` and ``after_first_recovery_max``."""
+    ``at_recoveries`` and ``after_first_recovery_max``; ``pronation_at_limit_from_s`` (the
+    first time the right forearm is at a pronation limit [s]) and
+    ``lumbar_after_first_recovery_min_deg`` (the lumbar spine's least flexion [deg] from
+    the first recovery on)."""
     simulation = run(line, variant)
     s, frame = simulation.summary(), simulation.to_frame().set_index("time_s")
     first, lost = s["first_to_fatigue"], s["task"]["lost"]
@@ -84,9 +99,21 @@ def run_facts(line: str, variant: str) -> dict[str, Any]:
             example().recovery_positions(simulation), s["recovery_postures"], strict=True
         )
     ]
-    label = example().VARIANTS[VARIANTS.index(variant)][0]
+    row = None
+    if variant in VARIANTS:
+        label = example().VARIANTS[VARIANTS.index(variant)][0]
+        row = example().row(LABELS[line], label, simulation)
+    body = simulation.result.problem.body
+    pronation = frame["forearm_pronation_r_deg"]
+    limits = [math.degrees(b[body.index["forearm_pronation_r"]]) for b in (body.lower, body.upper)]
+    at_limit = pronation[
+        (pronation - limits[0] < AT_LIMIT_DEG) | (limits[1] - pronation < AT_LIMIT_DEG)
+    ]
+    after = frame.loc[recoveries[0]["time_s"] :] if recoveries else frame.iloc[0:0]
     return s | {
-        "row": example().row(LABELS[line], label, simulation),
+        "row": row,
+        "pronation_at_limit_from_s": at_limit.index.min() if len(at_limit) else None,
+        "lumbar_after_first_recovery_min_deg": after["lumbar_flexion_deg"].min(),
         "recoveries": recoveries,
         "first_s": first["time_s"] if first else None,
         "first_group": group(first["half_joint"]) if first else None,
@@ -190,15 +217,14 @@ def table(region: Region, session: Session) -> str:
 def start(line: str) -> dict[str, Any]:
     """The start posture of a line's file: ``groups`` (each group's ``strength_Nm``,
     ``torque_Nm``, ``load_pct_mvc`` and ``endurance_min``, by name), ``shoulder_deg`` (the
-    right shoulder's flexion [deg]) and the dot's ``height_m`` above the floor and
-    ``distance_m`` from the right shoulder's joint centre [m]."""
+    right shoulder's flexion [deg] in the solved posture) and the dot's ``height_m`` above
+    the floor and ``distance_m`` from the right shoulder's joint centre [m]."""
     problem = cp.load(ROOT / "problems" / f"{LINES[line]}.toml")
-    frame = cp.solve(problem).to_frame().set_index("name")
+    answer = cp.solve(problem)
     height, distance = (float(v) for v in example().wrist_position(problem)(problem.posture))
-    shoulder = problem.posture[problem.body.index["shoulder_flexion_r"]]
     return {
-        "groups": frame.to_dict("index"),
-        "shoulder_deg": math.degrees(float(shoulder)),
+        "groups": answer.to_frame().set_index("name").to_dict("index"),
+        "shoulder_deg": answer.posture_deg["shoulder_flexion_r"],
         "height_m": height,
         "distance_m": distance,
     }
@@ -213,13 +239,21 @@ def values(region: Region, session: Session) -> dict[str, Any]:
 def every_line() -> dict[str, Any]:
     """The facts of every run, by line and variant (``{m45[paper2][lost_s]:.0f}``), with
     the line's ``start`` (:func:`start`) and ``first_s_all`` (the first threshold's time
-    [s] when every run of the line has the same one, else None)."""
+    [s] when every run of the line has the same one, else None); ``all`` holds the
+    ``first_s`` every run shares (else None) and the number of ``runs``."""
     found: dict[str, Any] = {}
     for line in LINES:
         runs = {v: facts(line, v) for v in VARIANTS}
         firsts = {f["first_s"] for f in runs.values()}
+        if line == "horizontal":
+            runs |= {v: facts(line, v) for v in CHECKS}
         found[line] = runs | {
             "start": start(line),
             "first_s_all": firsts.pop() if len(firsts) == 1 else None,
         }
+    common = {found[line]["first_s_all"] for line in LINES}
+    found["all"] = {
+        "first_s": common.pop() if len(common) == 1 else None,
+        "runs": len(LINES) * len(VARIANTS),
+    }
     return found
