@@ -285,10 +285,10 @@ def test_the_share_for_whom_a_schedule_is_sustainable(tmp_path) -> None:
     result, out = _population(
         tmp_path, "--set", "simulation.duration_s=300", "--set", "loads[0].mass_kg=6", *schedule
     )
-    assert result.exit_code == 0, result.output
     summary = json.loads((out / "population.json").read_text())
     assert summary["schedule"] == {"t_on_s": 10.0, "t_off_s": 20.0}
     rows = list(csv.DictReader((out / "summary.csv").open()))
+    assert result.exit_code == int(any(r["flags"] for r in rows)), result.output
     counts = []
     for sex, data in summary["sexes"].items():
         mine = [r for r in rows if r["body.sex"] == sex]
