@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from . import parallel
 from .generators import GENERATORS, render, same
 from .regions import RegionError, find_regions, replace_bodies
 from .session import ROOT, Session
@@ -56,6 +57,20 @@ def process(path: Path, update: bool) -> tuple[int, list[str], list[str]]:
     return len(regions), drifted, failed
 
 
+def prefetch(paths: list[Path]) -> None:
+    """Start in the background the simulations of every generator the documents name
+    (refusing an unknown one), so that they run while the first documents are made."""
+    started = set()
+    for path in paths:
+        for region in find_regions(path):
+            generator = GENERATORS.get(region.name)
+            if generator is None:
+                raise RegionError(f"{region.where}: no generator named {region.name!r}")
+            if generator.prefetch is not None and generator.prefetch not in started:
+                generator.prefetch()
+                started.add(generator.prefetch)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Check or update; the exit code is 1 when a region drifted (check) or failed."""
     parser = argparse.ArgumentParser(prog="python -m docs.generate", description=__doc__)
@@ -65,14 +80,18 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     paths = [p.resolve() for p in options.documents] or documents()
     drifted, failed, count = 0, 0, 0
-    for path in paths:
-        try:
+    try:
+        prefetch(paths)
+        for path in paths:
             regions, drifts, failures = process(path, options.action == "update")
-        except RegionError as error:
-            print(f"error: {error}", file=sys.stderr)
-            return 2
-        print("\n".join([*drifts, *failures]), end="\n" if drifts or failures else "")
-        count, drifted, failed = count + regions, drifted + len(drifts), failed + len(failures)
+            print("\n".join([*drifts, *failures]), end="\n" if drifts or failures else "")
+            count, drifted = count + regions, drifted + len(drifts)
+            failed += len(failures)
+    except RegionError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    finally:
+        parallel.shutdown()
     verb = "rewritten" if options.action == "update" else "drifted"
     print(
         f"{count} generated regions in {len(paths)} documents: {drifted} {verb}, "

@@ -19,16 +19,17 @@ class Generator:
 
     make: Callable[[Region, Session], str | Mapping[str, Any]]
     volatile: re.Pattern[str] | None = None
+    prefetch: Callable[[], None] | None = None
 
 
 GENERATORS: dict[str, Generator] = {
     "console": Generator(console.generate, console.TIMINGS),
     "python-output": Generator(python_output.generate),
-    "holding-laws": Generator(paper_arm.laws_table),
-    "paper-arm": Generator(paper_arm.values),
-    "wall-table": Generator(wall.table),
-    "wall-example": Generator(wall.example_table),
-    "wall": Generator(wall.values),
+    "holding-laws": Generator(paper_arm.laws_table, prefetch=paper_arm.prefetch),
+    "paper-arm": Generator(paper_arm.values, prefetch=paper_arm.prefetch),
+    "wall-table": Generator(wall.table, prefetch=wall.prefetch),
+    "wall-example": Generator(wall.example_table, prefetch=wall.prefetch),
+    "wall": Generator(wall.values, prefetch=wall.prefetch),
     "summary": Generator(runs.summary),
     "simulate": Generator(runs.simulate),
     "solve": Generator(runs.solve),

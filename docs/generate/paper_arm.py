@@ -65,12 +65,20 @@ def case_facts(elevation_deg: float, law: str, keep: int, strategy: str) -> dict
     }
 
 
+def every_case() -> list[tuple[float, str, int, str]]:
+    """Every case of the table, with each strategy: (elevation, law, kept levels, strategy)."""
+    return [(e, law, keep, s) for _, e, keep, law in cases() for s in STRATEGIES]
+
+
+def prefetch() -> None:
+    """Start every case in the background."""
+    parallel.submit(case_facts, every_case())
+
+
 @cache
 def all_cases() -> dict[tuple[float, str, int, str], dict[str, Any]]:
     """:func:`case_facts` of every case of the table, with each strategy."""
-    return parallel.compute(
-        case_facts, [(e, law, keep, s) for _, e, keep, law in cases() for s in STRATEGIES]
-    )
+    return parallel.compute(case_facts, every_case())
 
 
 def group(half_joint: str | None) -> str:
