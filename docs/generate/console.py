@@ -10,6 +10,7 @@ dropped columns becomes one ``...`` column).
 
 from __future__ import annotations
 
+import glob
 import itertools
 import re
 import shlex
@@ -48,12 +49,19 @@ def commands(body: str) -> tuple[str, list[list[str]]]:
     return lines[0], found
 
 
+def expanded(word: str) -> list[str]:
+    """``word`` as the shell passes it: a word with ``*`` becomes the files it matches in
+    the current folder, sorted (itself when none does)."""
+    return (sorted(glob.glob(word)) or [word]) if "*" in word else [word]
+
+
 def run(command: list[str], session: Session) -> str:
     """What ``command`` (its lines as written) prints, run in the session's folder."""
     from casadi_posture.cli import main
 
     words = shlex.split(" ".join(line.removesuffix("\\") for line in command))
     with session.inside():
+        words = [found for word in words for found in expanded(word)]
         result = CliRunner().invoke(main, words[2:], prog_name="casadi-posture")
     if result.exception is not None and not isinstance(result.exception, SystemExit):
         raise RuntimeError(f"{command[0]} raised {result.exception!r}") from result.exception
