@@ -7,7 +7,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from . import console, paper_arm, python_output, runs, wall
+from . import arm_figures, console, endurance, paper_arm, python_output, runs, wall
 from .regions import Region
 from .session import Session
 
@@ -25,11 +25,14 @@ class Generator:
 GENERATORS: dict[str, Generator] = {
     "console": Generator(console.generate, console.TIMINGS),
     "python-output": Generator(python_output.generate),
+    "arm-figures": Generator(arm_figures.values, prefetch=arm_figures.prefetch),
     "holding-laws": Generator(paper_arm.laws_table, prefetch=paper_arm.prefetch),
     "paper-arm": Generator(paper_arm.values, prefetch=paper_arm.prefetch),
     "wall-table": Generator(wall.table, prefetch=wall.prefetch),
     "wall-example": Generator(wall.example_table, prefetch=wall.prefetch),
     "wall": Generator(wall.values, prefetch=wall.prefetch),
+    "endurance-table": Generator(endurance.table),
+    "endurance": Generator(endurance.values),
     "summary": Generator(runs.summary),
     "simulate": Generator(runs.simulate),
     "solve": Generator(runs.solve),
