@@ -7,7 +7,18 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from . import arm_figures, console, endurance, paper_arm, python_output, runs, wall
+from . import (
+    arm_figures,
+    console,
+    endurance,
+    low_back,
+    paper_arm,
+    postures,
+    python_output,
+    runs,
+    strength,
+    wall,
+)
 from .regions import Region
 from .session import Session
 
@@ -33,6 +44,9 @@ GENERATORS: dict[str, Generator] = {
     "wall": Generator(wall.values, prefetch=wall.prefetch),
     "endurance-table": Generator(endurance.table),
     "endurance": Generator(endurance.values),
+    "low-back": Generator(low_back.values, prefetch=low_back.prefetch),
+    "posture": Generator(postures.values),
+    "strength-age": Generator(strength.values),
     "summary": Generator(runs.summary),
     "simulate": Generator(runs.simulate),
     "solve": Generator(runs.solve),

@@ -24,8 +24,10 @@ def with_asymmetry(summary: dict[str, Any]) -> dict[str, Any]:
 
 
 def summary(region: Region, session: Session) -> dict[str, Any]:
-    """A ``summary.json`` of the working folder (``file=``), :func:`with_asymmetry`."""
-    return with_asymmetry(json.loads((session.folder / region.args["file"]).read_text()))
+    """A ``summary.json`` of the working folder (``file=``), :func:`with_asymmetry`, and
+    ``groups``: its ``half_joints`` by name."""
+    found = with_asymmetry(json.loads((session.folder / region.args["file"]).read_text()))
+    return found | {"groups": {h["half_joint"]: h for h in found["half_joints"]}}
 
 
 def number(cell: str) -> float | str:
