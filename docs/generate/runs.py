@@ -87,6 +87,9 @@ def simulate(region: Region, session: Session) -> dict[str, Any]:
 
 def solve(region: Region, session: Session) -> dict[str, Any]:
     """The problem's posture solved: ``groups``, each half-joint's row of
-    :meth:`to_frame` by name (strength and torque [N·m], load [%MVC], endurance [min])."""
-    frame = cp.solve(problem(region, session)).to_frame().set_index("name")
-    return {"groups": frame.to_dict("index")}
+    :meth:`to_frame` by name (strength and torque [N·m], load [%MVC], endurance [min]),
+    and ``capable_pct``, the share of each sex capable [%] by sex."""
+    answer = cp.solve(problem(region, session))
+    frame = answer.to_frame().set_index("name")
+    shares = {sex: answer.capable.share(sex) for sex in ("male", "female")}
+    return {"groups": frame.to_dict("index"), "capable_pct": shares}
