@@ -47,6 +47,7 @@ GENERATORS: dict[str, Generator] = {
     "low-back": Generator(low_back.values, prefetch=low_back.prefetch),
     "posture": Generator(postures.values),
     "strength-age": Generator(strength.values),
+    "strengths": Generator(strength.strengths),
     "summary": Generator(runs.summary),
     "simulate": Generator(runs.simulate),
     "solve": Generator(runs.solve),

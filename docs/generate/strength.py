@@ -1,11 +1,13 @@
-"""docs/strength.md: the shipped strength's age terms as the package computes them
-(``strength-age``)."""
+"""docs/strength.md: the shipped strengths of the reference man and woman (``strengths``)
+and their age terms (``strength-age``), as the package computes them."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
-from casadi_posture.biomech.strength import age_factor, elbow_flexion
+from casadi_posture.biomech.strength import age_factor, default_strength, elbow_flexion
+from casadi_posture.data import parameters
 from casadi_posture.spec.schema import BodySpec
 
 from .regions import Region
@@ -34,4 +36,36 @@ def values(region: Region, session: Session) -> dict[str, Any]:
         "loss_male_pct": 100 * (factor["male"][52] - factor["male"][62]),
         "loss_female_pct": 100 * (factor["female"][40] - factor["female"][50]),
         "elbow_pct": 100 * elbow["male"][50] / elbow["male"][30],
+    }
+
+
+def reference(sex: str) -> tuple[float, float]:
+    """De Leva's reference ``sex``: stature [m] and body mass [kg]."""
+    table = parameters.load("anthropometry_de_leva_1996")
+    prefix = f"anthropometry_de_leva_1996.{sex}.reference"
+    return table[f"{prefix}.stature"].value, table[f"{prefix}.body_mass"].value
+
+
+def group_strength(group: str, sex: str, age: float) -> float | dict[int, float]:
+    """The default strength [N·m] of ``group`` for de Leva's reference ``sex`` at ``age``
+    [years]; a curve's at each of its knots, by angle [deg]."""
+    stature, mass = reference(sex)
+    model, _ = default_strength(group, sex=sex, stature=stature, body_mass=mass, age=age)
+    if hasattr(model, "fractions"):
+        return {
+            round(math.degrees(a)): float(model.value) * f
+            for a, f in zip(model.angles, model.fractions, strict=True)
+        }
+    return float(model.value)
+
+
+def strengths(region: Region, session: Session) -> dict[str, Any]:
+    """``man[GROUP]`` and ``woman[GROUP]``: the default strength [N·m] of each group of
+    ``groups=`` (comma-separated) for de Leva's reference man and woman at 30 y, a curve's
+    by its knots' angles [deg] (``{man[shoulder_flexors][45]:.1f}``); ``man25``: at 25 y."""
+    groups = region.args["groups"].split(",")
+    people = {"man": ("male", 30), "woman": ("female", 30), "man25": ("male", 25)}
+    return {
+        name: {g: group_strength(g, sex, age) for g in groups}
+        for name, (sex, age) in people.items()
     }
