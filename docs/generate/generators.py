@@ -16,6 +16,7 @@ from . import (
     postures,
     python_output,
     runs,
+    sensitivity,
     strength,
     wall,
 )
@@ -48,6 +49,7 @@ GENERATORS: dict[str, Generator] = {
     "posture": Generator(postures.values),
     "strength-age": Generator(strength.values),
     "strengths": Generator(strength.strengths),
+    "sensitivity-inputs": Generator(sensitivity.values),
     "summary": Generator(runs.summary),
     "simulate": Generator(runs.simulate),
     "solve": Generator(runs.solve),
