@@ -12,7 +12,7 @@ import pandas as pd
 
 import casadi_posture as cp
 
-from . import parallel
+from . import paper_arm, parallel
 from .regions import Region
 from .session import ROOT, Session
 
@@ -47,12 +47,6 @@ def run(name: str, keys: tuple[tuple[str, Any], ...]) -> tuple[dict[str, Any], p
 def prefetch() -> None:
     """Start every run in the background."""
     parallel.submit(run, CASES)
-
-
-def sci(value: float) -> str:
-    """``1.8e-09`` → ``'2e-9'``."""
-    mantissa, exponent = f"{value:.0e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
 
 
 def minus(value: float, digits: int = 1) -> str:
@@ -129,13 +123,12 @@ def figures() -> dict[str, Any]:
     ex_body = load("strategy_extensors").body
     fe_s, fe = found["strategy_frontal_elbow", ()]
     fep_s, fep = found["strategy_frontal_elbow", (("fatigue.strategy", "passive"),)]
-    arm = load("holding_horizontal").body.landmarks
     return {
         "fig3_zeros": fig3(),
         "lp": {
             "first_s": lp_s["first_to_fatigue"]["time_s"],
             "slide_m": -lp["wrist_along_line_m"].min(),
-            "line_m": sci(lp["residual_level1_m"].max()),
+            "line_m": paper_arm.sci(lp["residual_level1_m"].max()),
             "plane_m": lp["residual_level2_m"].max(),
             "recovery_s": recovery["time_s"],
             "shoulder_deg": minus(recovery["posture_deg"]["shoulder_flexion"]),
@@ -146,7 +139,7 @@ def figures() -> dict[str, Any]:
         "m25": holding(*found["holding_m25", ()]),
         "horizontal": holding(*found["holding_horizontal", ()]),
         "m45": holding(*found["holding_m45", ()]),
-        "reach_m": math.dist(arm["shoulder"].position, arm["wrist"].position),
+        "reach_m": paper_arm.reach_m(load("holding_horizontal")),
         "sl": {
             "start_Nm": sl["tau_active_shoulder_flexion_Nm"].iloc[0],
             "start_pct": sl["load_shoulder_flexors_pct_mvc"].iloc[0],

@@ -28,6 +28,9 @@ CURVE_FILES = ("holding_m45", "line_plane_hysteresis", "strategy_shoulder_limit"
 SHOULDER_HEIGHT_M = 1.42
 #: Two recoveries closer than this [m] in height and distance are at one position.
 SAME_POSITION_M = 0.005
+#: The load threshold T_0 [%MVC] the documents try in place of the law's (no source
+#: supports it).
+T0_ALTERNATIVE = 25.0
 #: A line residual [m] above this at a recovery: the constraint broke the line there.
 ON_LINE_M = 1e-4
 
@@ -50,14 +53,19 @@ def holding(elevation_deg: float, law: str, keep: int, strategy: str = "active")
 
 def case_facts(elevation_deg: float, law: str, keep: int, strategy: str) -> dict[str, Any]:
     """What the documents say of one holding case (in a form that pickles): its
-    ``cycles``, ``recovery`` and ``lost`` texts, ``postures`` (time [s], shoulder and
+    ``cycles``, ``recovery`` and ``lost`` texts, ``positions``
+    (:func:`recovery_positions`), ``line_max_m`` (the line's largest residual [m]),
+    ``postures`` (time [s], shoulder and
     elbow angles [deg] at every step) and the elbow ``end`` (:func:`at_the_end`)."""
     run = holding(elevation_deg, law, keep, strategy)
     frame = run.to_frame()
+    positions = recovery_positions(run)
     return {
         "cycles": run.summary()["fatigue_recovery_cycles"],
         "first_s": (run.summary()["first_to_fatigue"] or {}).get("time_s"),
-        "recovery": recovery_text(run),
+        "recovery": recovery_text(positions),
+        "positions": positions,
+        "line_max_m": frame["residual_level1_m"].max(),
         "lost": lost_text(run),
         "postures": frame[["time_s", "shoulder_flexion_deg", "elbow_flexion_deg"]].to_numpy(),
         "end": at_the_end(run),
@@ -86,29 +94,45 @@ def group(half_joint: str | None) -> str:
     return (half_joint or "").replace("_", " ")
 
 
-def recovery_text(run: cp.Simulation) -> str:
-    """The recovery positions: wrist height above the floor and distance from the
-    shoulder, when, and how far the line was broken there."""
+def recovery_positions(run: cp.Simulation) -> list[dict[str, Any]]:
+    """The recovery positions, recoveries at one position together: the wrist's
+    ``height_m`` above the floor and ``distance_m`` from the shoulder, ``times_s`` and
+    ``broken_m``, how far the line was broken at the first [m]."""
     frame = run.to_frame().set_index("time_s")
-    groups: list[list[tuple[float, float, float, float]]] = []
+    groups: list[dict[str, Any]] = []
     for posture in run.summary()["recovery_postures"]:
         t = posture["time_s"]
         x, z = frame.at[t, "wrist_x_m"], frame.at[t, "wrist_z_m"]
-        found = (t, SHOULDER_HEIGHT_M + z, math.hypot(x, z), frame.at[t, "residual_level1_m"])
+        height, distance = SHOULDER_HEIGHT_M + z, math.hypot(x, z)
         for g in groups:
-            if abs(g[0][1] - found[1]) < SAME_POSITION_M and abs(g[0][2] - found[2]) < (
-                SAME_POSITION_M
+            if (
+                abs(g["height_m"] - height) < SAME_POSITION_M
+                and abs(g["distance_m"] - distance) < SAME_POSITION_M
             ):
-                g.append(found)
+                g["times_s"].append(t)
                 break
         else:
-            groups.append([found])
+            groups.append(
+                {
+                    "height_m": height,
+                    "distance_m": distance,
+                    "times_s": [t],
+                    "broken_m": frame.at[t, "residual_level1_m"],
+                }
+            )
+    return groups
+
+
+def recovery_text(positions: list[dict[str, Any]]) -> str:
+    """The table's cell: each position, when, and how far the line was broken there."""
     parts = []
-    for g in groups:
-        t, height, distance, off = g[0]
-        again = f"; the same at {', '.join(f'{r[0]:.0f}' for r in g[1:])} s" if g[1:] else ""
-        broken = f"; line broken by {off:.3f} m" if off > ON_LINE_M else ""
-        parts.append(f"{height:.2f} m, {distance:.2f} m ({t:.0f} s{again}{broken})")
+    for g in positions:
+        first, *later = g["times_s"]
+        again = f"; the same at {', '.join(f'{t:.0f}' for t in later)} s" if later else ""
+        broken = f"; line broken by {g['broken_m']:.3f} m" if g["broken_m"] > ON_LINE_M else ""
+        parts.append(
+            f"{g['height_m']:.2f} m, {g['distance_m']:.2f} m ({first:.0f} s{again}{broken})"
+        )
     return "; ".join(parts) or "—"
 
 
@@ -190,6 +214,53 @@ def with_the_curve(name: str) -> cp.Simulation:
     return cp.simulate(cp.from_dict(data, str(base.path), {}))
 
 
+def reach_m(p: cp.Problem) -> float:
+    """The arm's reach: the wrist's distance from the shoulder, the arm straight [m]."""
+    marks = p.body.landmarks
+    return math.dist(marks["shoulder"].position, marks["wrist"].position)
+
+
+def sci(value: float) -> str:
+    """``1.8e-09`` → ``'2e-9'``."""
+    mantissa, exponent = f"{value:.0e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def times(count: int) -> str:
+    """1 → 'once', 2 → 'twice', 3 → '3 times'."""
+    return {1: "once", 2: "twice"}.get(count, f"{count} times")
+
+
+def laws(found: dict[tuple[float, str, int, str], dict[str, Any]]) -> dict[str, Any]:
+    """The bullets under the recovery-law table: the laws that recover at all
+    (``recovering``), ``3cc_r``'s recoveries with the paper's constraint by line label
+    (``times``, ``where``: at how many positions, ``height_m`` of the first, ``broken``: how
+    far the line was broken there, as text), the recoveries' distances from the shoulder
+    (``distances_m``: least and most [m]) and the line's largest residual when it is kept
+    (``kept_line_m``)."""
+    active = {k: v for k, v in found.items() if k[3] == "active"}
+    recovering = sorted({k[1] for k, v in active.items() if v["cycles"]})
+    by_line = {}
+    for label, elevation in LINES:
+        positions = active[elevation, "3cc_r", 0, "active"]["positions"]
+        broken = max((g["broken_m"] for g in positions), default=0.0)
+        by_line[label] = {
+            "times": times(sum(len(g["times_s"]) for g in positions)),
+            "where": "one position" if len(positions) == 1 else f"{len(positions)} positions",
+            "height_m": positions[0]["height_m"] if positions else math.nan,
+            "broken": f", though there only by breaking the line (by {broken:.3f} m)"
+            if broken > ON_LINE_M
+            else "",
+        }
+    distances = [g["distance_m"] for v in active.values() for g in v["positions"]]
+    return {
+        "recovering": " and ".join(f"`{law}`" for law in recovering),
+        "3cc_r": by_line,
+        "distances_m": (min(distances), max(distances)),
+        "kept_line_m": sci(max(v["line_max_m"] for k, v in active.items() if k[2] == 1)),
+    }
+
+
 def first(run: cp.Simulation) -> str:
     """Which group reaches the fatigue threshold first, and when; or that none does."""
     found = run.summary()["first_to_fatigue"]
@@ -212,7 +283,9 @@ def explanation() -> dict[str, Any]:
     ``end`` by line label (:func:`at_the_end` of the paper's constraint with the
     ``threshold`` law), ``strategies`` (whether the active and passive runs of every case
     are identical), ``elbow_limit_deg``, ``hysteresis`` (the line-plane file's groups at
-    the start) and ``curve`` (what the strength curve would change)."""
+    the start), ``curve`` (what the strength curve would change), ``laws`` (:func:`laws`),
+    the load's ``mass_kg``, the arm's ``reach_m`` and ``t0_25`` (the horizontal hold's
+    cycles with T_0 = ``T0_ALTERNATIVE``)."""
     m45 = problem("holding_m45")
     lp = problem("line_plane_hysteresis")
     found = all_cases()
@@ -230,4 +303,13 @@ def explanation() -> dict[str, Any]:
         "elbow_limit_deg": math.degrees(m45.body.upper[m45.body.index["elbow_flexion"]]),
         "hysteresis": start_loads(lp),
         "curve": {name: first(with_the_curve(name)) for name in CURVE_FILES},
+        "laws": laws(found),
+        "mass_kg": m45.data["loads"][0]["mass_kg"],
+        "reach_m": reach_m(m45),
+        "t0_25": {
+            "cycles": cp.simulate(
+                problem("holding_horizontal", {"fatigue.load_threshold_pct_mvc": T0_ALTERNATIVE})
+            ).summary()["fatigue_recovery_cycles"],
+            "t0": T0_ALTERNATIVE,
+        },
     }
