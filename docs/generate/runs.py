@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from typing import Any
 
 import casadi_posture as cp
@@ -38,11 +39,18 @@ def number(cell: str) -> float | str:
         return cell
 
 
+#: The plausibility flag of a trunk leaning back, with its lumbar extension [deg].
+LEAN = re.compile(r"the trunk leans back \((\d+)° of lumbar extension\)")
+
+
 def table(region: Region, session: Session) -> dict[str, Any]:
-    """A CSV table of the working folder (``file=``): ``rows``, each a dict by column."""
+    """A CSV table of the working folder (``file=``): ``rows``, each a dict by column, and
+    ``leans_deg``, the least and most lumbar extension [deg] its ``flags`` name (None
+    when no row is flagged for a trunk leaning back)."""
     with (session.folder / region.args["file"]).open(newline="") as handle:
         rows = [{k: number(v) for k, v in row.items()} for row in csv.DictReader(handle)]
-    return {"rows": rows}
+    leans = [int(a) for row in rows for a in LEAN.findall(str(row.get("flags", "")))]
+    return {"rows": rows, "leans_deg": (min(leans), max(leans)) if leans else None}
 
 
 def overrides(text: str) -> dict[str, Any]:
