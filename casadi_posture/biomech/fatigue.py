@@ -168,9 +168,13 @@ class HoldingTimeFatigue:
         return settled + (fatigue - settled) * np.exp(-decay * dt_s)
 
     def _growth(self, load: np.ndarray) -> np.ndarray:
-        """``[T_N > T_0]/ET`` [1/s] of every half-joint."""
-        endurance_s = self.endurance.endurance_time_s(load, self.regions)
-        return np.where(load > self._threshold.value, 1.0 / endurance_s, 0.0)
+        """``[T_N > T_0]/ET`` [1/s] of every half-joint: infinite where ``ET`` is 0 (a load
+        above strength exhausts the group at once)."""
+        endurance_s = np.asarray(self.endurance.endurance_time_s(load, self.regions), float)
+        rate = np.divide(
+            1.0, endurance_s, out=np.full_like(endurance_s, np.inf), where=endurance_s > 0
+        )
+        return np.where(load > self._threshold.value, rate, 0.0)
 
     def level(self, state: np.ndarray, load_pct_mvc: ArrayLike) -> np.ndarray:
         """The fatigue ``F`` itself (``ht/mht`` of paper eq. 7 for a constant load), at most 1:
