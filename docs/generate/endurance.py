@@ -1,16 +1,18 @@
 """docs/endurance.md: every endurance model against Frey-Law & Avin's meta-analysis, as the
-package's models compute it (``endurance-table``), and the recovery laws' constants for
-the prose (``endurance``)."""
+package's models compute it (``endurance-table``), the recovery laws' constants for the
+prose (``endurance``) and the horizontal hold under each law (``recovery-laws``)."""
 
 from __future__ import annotations
 
 from typing import Any
 
+import casadi_posture as cp
 from casadi_posture.biomech.endurance import endurance_model
 from casadi_posture.biomech.fatigue import ThreeCompartmentFatigue
 
+from . import parallel
 from .regions import Region
-from .session import Session
+from .session import ROOT, Session
 
 #: The table's rows: joint regions and loads [%MVC].
 REGIONS = ("shoulder", "elbow")
@@ -74,3 +76,51 @@ def values(region: Region, session: Session) -> dict[str, Any]:
             for name in ("frey_law_avin", "manenica")
         },
     }
+
+
+#: The recovery laws' runs of the horizontal hold: (law, T_0 [%MVC], None for 3cc_r).
+LAW_CASES = [(law, t0) for law in ("threshold", "continuous") for t0 in (10, 15, 25)] + [
+    ("3cc_r", None)
+]
+
+
+def law_run(law: str, t0: int | None) -> dict[str, Any]:
+    """The horizontal hold simulated under ``law`` (with T_0 = ``t0`` [%MVC]): the
+    limiting group's ``endurance_min`` at the start, ``first_s`` (the first group at the
+    fatigue threshold [s]), ``exhausted`` (its words, or 'none'), ``cycles``, ``held``
+    ('369', or '≥ 1800' for a run held to its end) and ``loads``, each group's load at
+    the start [%MVC] by name."""
+    keys: dict[str, Any] = {"fatigue.recovery_law": law}
+    if t0 is not None:
+        keys["fatigue.load_threshold_pct_mvc"] = t0
+    run = cp.simulate(cp.load(ROOT / "problems" / "holding_horizontal.toml", keys))
+    s = run.summary()
+    exhausted, task = s["exhausted_group"], s["task"]
+    return {
+        "endurance_min": s["limiting_group_at_start"]["endurance_min"],
+        "first_s": s["first_to_fatigue"]["time_s"] if s["first_to_fatigue"] else None,
+        "exhausted": exhausted["half_joint"].replace("_", " ") if exhausted else "none",
+        "cycles": s["fatigue_recovery_cycles"],
+        "held": f"{'≥ ' if task['held_s_is_lower_bound'] else ''}{task['held_s']:.0f}",
+        "loads": {h["half_joint"]: h["initial_load_pct_mvc"] for h in s["half_joints"]},
+    }
+
+
+def prefetch_laws() -> None:
+    """Start the recovery laws' runs in the background."""
+    parallel.submit(law_run, LAW_CASES)
+
+
+def laws(region: Region, session: Session) -> dict[str, Any]:
+    """``run[LAW][T_0]`` (``run[3cc_r][0]``): :func:`law_run` of each case, and
+    ``low[LAW]``: '10 or 15' when T_0 = 10 and 15 give the same run, else '15' (the row
+    then shows T_0 = 15)."""
+    found = parallel.compute(law_run, LAW_CASES)
+    runs: dict[str, dict[int, dict[str, Any]]] = {}
+    for (law, t0), facts in found.items():
+        runs.setdefault(law, {})[t0 or 0] = facts
+    low = {
+        law: "10 or 15" if runs[law][10] == runs[law][15] else "15"
+        for law in ("threshold", "continuous")
+    }
+    return {"run": runs, "low": low}

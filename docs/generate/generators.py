@@ -46,6 +46,7 @@ GENERATORS: dict[str, Generator] = {
     "wall": Generator(wall.values, prefetch=wall.prefetch),
     "endurance-table": Generator(endurance.table),
     "endurance": Generator(endurance.values),
+    "recovery-laws": Generator(endurance.laws, prefetch=endurance.prefetch_laws),
     "low-back": Generator(low_back.values, prefetch=low_back.prefetch),
     "posture": Generator(postures.values),
     "strength-age": Generator(strength.values),
