@@ -69,8 +69,9 @@ def structure_key(hierarchy: TaskHierarchy) -> str:
     fingerprint (its sizes, its number of parameters, sparsity and instruction count, and
     its values at one fixed pseudo-random point, which differ for another geometry, other
     masses or other kinds of task, never for other targets, the function's parameters) and
-    of the joint ranges (which the solvers build in). Two functions agreeing at a random point are the same function
-    but with probability zero; serialising the function instead costs 0.07 s at 29 DOF."""
+    of the joint ranges (which the solvers build in). Two different functions agree at a
+    random point with probability zero; serialising the function instead costs 0.07 s at
+    29 DOF."""
     body, f = hierarchy.body, hierarchy.function
     rng = np.random.default_rng(_FINGERPRINT_SEED)
     values = f(rng.uniform(-1.0, 1.0, body.n), rng.uniform(-1.0, 1.0, hierarchy.p.numel()))
