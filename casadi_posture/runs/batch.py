@@ -386,8 +386,9 @@ def _processes(todo: list[Case], jobs: int) -> Iterator[Outcome]:
                 raise KeyboardInterrupt
     finally:
         if pending:
-            for future in pending:
-                future.cancel()
+            # Only the pool's own thread may cancel: a future cancelled here and then
+            # failed by that thread when the workers die raises InvalidStateError there
+            # (CPython 3.11), a traceback on the terminal after Ctrl-C.
             for process in multiprocessing.active_children():
                 process.terminate()
         pool.shutdown(wait=True, cancel_futures=True)
