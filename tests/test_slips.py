@@ -146,3 +146,43 @@ def test_no_shipped_problem_or_template_holds_a_slip() -> None:
         assert load_problem(f"{name}.toml", text=template(name)).notes == (), name
     result = run("validate", PROBLEMS)
     assert result.exit_code == 0 and notes(result.stdout) == []
+
+
+#: Each command that writes a JSON result beside its other files: its options (short runs)
+#: and the JSON file; population's with a note every worker shares.
+WRITERS = {
+    "design": (["--free", "tasks[0].point_m[2],tasks[1].target_m[2]=-0.5:0.1"], "design.json"),
+    "duty-cycle": (["--t-off", "30", "--horizon", "60"], "duty_cycle.json"),
+    "sensitivity": ([], "sensitivity.json"),
+    "population": (
+        ["--n", "1", "--sex", "male", "--jobs", "1", "--set", "simulation.duration_s=5"],
+        "population.json",
+    ),
+}
+
+
+def written_notes(command: str, out: Path, *sets: str) -> tuple[list[str], str]:
+    """The notes of the JSON file ``command`` writes into ``out``, and what it printed."""
+    options, name = WRITERS[command]
+    result = run(command, HOLD, *options, *sets, "--out", out)
+    assert result.exit_code in (0, 1), result.output  # no bad input, no crash
+    data = json.loads((out / name).read_text(encoding="utf-8"))
+    held = data if isinstance(data, dict) else data[0]  # duty-cycle: a search per rest
+    return held["notes"], result.stdout
+
+
+@pytest.mark.parametrize("command", list(WRITERS))
+def test_every_json_file_carries_the_problem_s_notes(command: str, tmp_path: Path) -> None:
+    notes, stdout = written_notes(command, tmp_path / "out", "--set", "loads[0].mass_kg=500")
+    slip = next(note for note in notes if "loads[0].mass_kg = 500" in note)
+    assert slip.endswith("over 100 kg, more than a person holds; a mass in grams (0.5 kg)?")
+    assert stdout.count(f"note: {slip}\n") == 1  # printed once, as written
+
+
+@pytest.mark.parametrize("command", list(WRITERS))
+def test_a_problem_without_a_slip_writes_no_note(command: str, tmp_path: Path) -> None:
+    notes, stdout = written_notes(command, tmp_path / "out")
+    # Every slip's note starts with the file; design.json keeps the design's own notes.
+    assert not [note for note in notes if note.startswith(f"{HOLD}: ")]
+    assert notes == [] or command == "design"
+    assert f"note: {HOLD}: " not in stdout

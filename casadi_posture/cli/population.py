@@ -147,6 +147,8 @@ def population(
     if report.summary["groups_not_varied"]:
         fixed = ", ".join(report.summary["groups_not_varied"])
         click.echo(f"note: strength curves the file sets are not varied: {fixed}")
+    for note in report.summary["notes"]:
+        click.echo(f"note: {note}")
     click.echo(f"files: {batch.summary}, {out / 'population.json'}")
     for figure in report.figures:
         click.echo(f"figure: {figure}")

@@ -97,7 +97,8 @@ class DutyCycle:
     ``sustainable_t_on_s`` the longest hold found to stay below the threshold over the
     horizon and ``failing_t_on_s`` the shortest found to reach it (None where no such
     simulation: sustainable held continuously, or none sustainable); ``horizon_s`` the
-    simulated time [s] over which the threshold must not be reached."""
+    simulated time [s] over which the threshold must not be reached; ``notes`` the
+    problem's (spec/slips.py)."""
 
     problem: str
     t_off_s: float
@@ -114,6 +115,7 @@ class DutyCycle:
     wall_time_s: float
     effort: Effort | None = None
     runs: dict[str, SimulationResult] = field(default_factory=dict, repr=False)
+    notes: tuple[str, ...] = ()
 
     @property
     def duty_cycle_pct(self) -> float | None:
@@ -196,8 +198,8 @@ class DutyCycle:
 
     def summary(self) -> dict[str, Any]:
         """The search as plain data (duty_cycle.json): settings, verdict, bracket, duty
-        cycle [%], Potvin's guideline beside it, every trial, the wall time [s] and the
-        flags."""
+        cycle [%], Potvin's guideline beside it, every trial, the wall time [s], the
+        problem's notes and the flags."""
         return {
             "problem": self.problem,
             "t_off_s": self.t_off_s,
@@ -217,6 +219,7 @@ class DutyCycle:
             "simulations": len(self.trials),
             "wall_time_s": self.wall_time_s,
             "trials": [t.__dict__ for t in self.trials],
+            "notes": list(self.notes),
             "flags": self.flags,
         }
 
@@ -324,6 +327,7 @@ def duty_cycle(
             time.perf_counter() - start,
             _effort(results[steps]) if steps in results else None,
             {label: results[n] for label, n in ends if n is not None},
+            problem.notes,
         )
 
     tolerance_steps = max(1, math.floor(tolerance / dt + 1e-9))

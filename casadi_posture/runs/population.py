@@ -136,9 +136,10 @@ def population_summary(
     still holding at ``HORIZONS_MIN`` with their intervals, the share for whom the task (on
     its schedule) is sustainable over the whole run, the median time held [s], the regions
     that gave out first and the limiting regions at the start, counted; the groups not
-    varied."""
+    varied; the workers' notes (``worker_notes``)."""
     by_name = {w.name: w for w in workers}
-    out: dict[str, Any] = {"groups_not_varied": list(fixed), "sexes": {}}
+    notes = worker_notes([r for r in report.rows if r["case"] in by_name])
+    out: dict[str, Any] = {"groups_not_varied": list(fixed), "notes": notes, "sexes": {}}
     for sex in SEXES:
         rows = [r for r in report.rows if r["case"] in by_name and by_name[r["case"]].sex == sex]
         if not rows:
@@ -160,6 +161,17 @@ def population_summary(
             ),
         }
     return out
+
+
+def worker_notes(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """The distinct notes of the workers' problems (spec/slips.py: a load in grams is every
+    worker's, a body mass index out of range one worker's), each once, in the order met,
+    prefixed with how many workers it concerns unless it concerns all of them."""
+    counts = Counter(r["notes"] for r in rows if r.get("notes"))
+    return [
+        note if count == len(rows) else f"{count} of {len(rows)} workers: {note}"
+        for note, count in counts.items()
+    ]
 
 
 def check_size(n: int, sexes: Sequence[str], max_cases: int, problem: Path | None) -> None:

@@ -121,7 +121,8 @@ class Sensitivity:
         return _by_elasticity(rows, "compression_elasticity", "d_compression_N_per_unit")
 
     def to_dict(self) -> dict[str, object]:
-        """Everything, for JSON: inputs, outcomes, every derivative and elasticity."""
+        """Everything, for JSON: inputs, outcomes, every derivative and elasticity, the
+        problem's notes (spec/slips.py)."""
         groups = []
         for k, name in enumerate(self.groups):
             limited = bool(self.limited[k])
@@ -174,6 +175,7 @@ class Sensitivity:
                 if self.compression is not None
                 else "not computed (the body has no lumbar joint)",
             },
+            "notes": list(self.answer.problem.notes),
             "flags": list(self.flags),
             "wall_time_s": self.wall_time_s,
         }

@@ -108,7 +108,8 @@ class Design:
 
     def to_dict(self) -> dict[str, Any]:
         """Everything the command prints, as plain data (units in the key names; an
-        endurance of None is unlimited)."""
+        endurance of None is unlimited); ``notes`` the problem's (spec/slips.py), then the
+        design's."""
         unit = self.unit
         return {
             "problem": str(self.problem.path),
@@ -160,7 +161,7 @@ class Design:
                 "solver": self.check_answer.ik.solver if self.check_answer.ik else None,
             },
             **self._low_back(),
-            "notes": list(self.notes),
+            "notes": [*self.problem.notes, *self.notes],
             "flags": list(self.flags),
         }
 
