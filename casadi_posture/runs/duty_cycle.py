@@ -434,7 +434,8 @@ def _guide(cycle: DutyCycle, key: str) -> float | None:
 def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
     """Into ``out``: duty_cycle.json (every search and its trials), duty_cycle.csv (one row
     per rest time), duty_cycle.png (the fatigue of the runs at each end of the bracket
-    of the first search that found one, rests shaded) and, for more than one rest time,
+    of the first search that found one: its first cycles, rests shaded, and each cycle's peak
+    and trough over the horizon) and, for more than one rest time,
     duty_cycle_vs_t_off.png."""
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "duty_cycle.json", out / "duty_cycle.csv"]
@@ -448,7 +449,11 @@ def write_duty_cycles(cycles: Sequence[DutyCycle], out: Path) -> list[Path]:
     shown = next((c for c in cycles if c.verdict == "bracketed"), cycles[0] if cycles else None)
     if shown is not None and shown.runs:
         labelled = [
-            (f"t_on {_t_on(result)} s: {label} the threshold{_when(result, shown)}", result)
+            (
+                f"{'Sustainable' if label == 'stays below' else 'Not sustainable'}: "
+                f"{_cycle(result)}, {label} the threshold{_when(result, shown)}",
+                result,
+            )
             for label, result in shown.runs.items()
         ]
         paths.append(plot_runs(labelled, out / "duty_cycle.png"))
@@ -478,9 +483,13 @@ def span(horizon_s: float) -> str:
     return f"{horizon_s:g} s"
 
 
-def _t_on(result: SimulationResult) -> str:
+def _cycle(result: SimulationResult) -> str:
+    """``88 s on per 118 s cycle (74.6 % duty cycle)``: a trial's schedule on its step grid."""
     schedule = result.schedule
-    return "?" if schedule is None else f"{schedule.hold_steps * schedule.dt_s:g}"
+    if schedule is None or "rest" not in result.timeline.phase:
+        return "held continuously"
+    on, cycle = schedule.hold_steps * schedule.dt_s, schedule.period_steps * schedule.dt_s
+    return f"{on:g} s on per {cycle:g} s cycle ({100 * on / cycle:.1f} % duty cycle)"
 
 
 def _when(result: SimulationResult, cycle: DutyCycle) -> str:
