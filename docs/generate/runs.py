@@ -78,12 +78,14 @@ def problem(region: Region, session: Session) -> cp.Problem:
 def simulate(region: Region, session: Session) -> dict[str, Any]:
     """The problem simulated: its summary (:func:`with_asymmetry`) and ``at``, each whole
     second's timeline row by its time [s] (``{at[90][shoulder_flexion_deg]:.1f}``),
-    ``at_end``, the last row, ``duration_min`` and ``recoveries_min``, the recoveries'
-    times [min] as text."""
+    ``at_end``, the last row, ``duration_min``, ``recoveries_min``, the recoveries'
+    times [min] as text, and ``most_tired``, the half-joint whose fatigue rose highest."""
     run = cp.simulate(problem(region, session))
     frame = run.to_frame()
     rows = frame[frame["time_s"] == frame["time_s"].round()]
+    groups = run.summary()["half_joints"]
     return with_asymmetry(run.summary()) | {
+        "most_tired": max(groups, key=lambda g: g["max_fatigue"]),
         "at": {int(row["time_s"]): row for row in rows.to_dict("records")},
         "at_end": frame.iloc[-1].to_dict(),
         "duration_min": run.summary()["duration_s"] / 60,
