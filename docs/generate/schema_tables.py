@@ -17,10 +17,10 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from casadi_posture.adjustment.constraint import BLOCKED_FRACTION
+from casadi_posture.adjustment.constraint import BLOCKED_FRACTION, HOLD_FRACTION
 from casadi_posture.biomech.low_back import limits
 from casadi_posture.data import parameters
-from casadi_posture.ik.lexicographic import SQP_MAX_ITERATIONS, LexicographicOptions
+from casadi_posture.ik.lexicographic import SQP_MAX_ITERATIONS, SQP_RADIUS, LexicographicOptions
 from casadi_posture.ik.nullspace import NullspaceOptions
 from casadi_posture.ik.result import ACHIEVED_TOLERANCE
 from casadi_posture.motion.scaling import MAX_LENGTH_RATIO
@@ -146,12 +146,16 @@ def constants() -> dict[str, float]:
         "nullspace_tolerance": nullspace.tolerance,
         "nullspace_damping": nullspace.damping,
         "nullspace_stall_iterations": nullspace.stall_iterations,
+        "nullspace_memory": nullspace.acceleration_memory,
+        "nullspace_curvature": nullspace.curvature,
+        "sqp_radius_rad": SQP_RADIUS,
         "lexicographic_iterations": lexicographic.max_iterations,
         "lexicographic_tolerance": lexicographic.tolerance,
         "sqp_iterations": SQP_MAX_ITERATIONS,
         "load_threshold_pct_mvc": parameters.value("fatigue", "load_threshold"),
         "rest_multiplier": parameters.value("fatigue", "rest_multiplier"),
         "blocked_pct": 100 * BLOCKED_FRACTION,
+        "hold_pct": 100 * HOLD_FRACTION,
         "max_length_ratio": MAX_LENGTH_RATIO,
         "design_limit_N": low_back["design"],
         "upper_limit_N": low_back["upper"],
