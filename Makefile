@@ -6,7 +6,7 @@ DEMO_OUT ?= out/demo
 # pytest workers (pytest-xdist): one per core; TEST_WORKERS=0 runs the suite in one process.
 TEST_WORKERS ?= auto
 
-.PHONY: demo test docs docs-check docs-update lint benchmark clean
+.PHONY: demo test docs docs-check docs-update docs-figures lint benchmark clean
 
 # One stamp per install: the demo needs the package and pandas (the README's Python
 # example makes DataFrames); the tests add pinocchio,
@@ -65,6 +65,12 @@ docs-check: $(VENV)/.test
 
 docs-update: $(VENV)/.test
 	$(BIN)/python -m docs.generate update
+
+# Every figure in docs/ (docs/*.png, docs/gallery/, docs/scenarios/) drawn again by the
+# command that makes it (docs/generate/figures.py) and copied into place; not compared
+# byte for byte (matplotlib's PNGs differ between its versions). FIGURES=docs/x.png ... for some.
+docs-figures: $(VENV)/.test
+	$(BIN)/python -m docs.generate.figures $(FIGURES)
 
 benchmark: $(VENV)/.dev
 	$(BIN)/python benchmarks/scaling.py
