@@ -69,6 +69,13 @@ class Span(NamedTuple):
         return low if low == high else f"{low}–{high}"
 
 
+class Angle(float):
+    """A signed value written as the pages write it: a minus sign (−), not a hyphen."""
+
+    def __format__(self, spec: str) -> str:
+        return super().__format__(spec).replace("-", "\N{MINUS SIGN}")
+
+
 def ordinal(n: int) -> str:
     """1st, 2nd, 3rd, 4th, ..., 11th, ..., 23rd."""
     suffix = "th" if n % 100 in (11, 12, 13) else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
@@ -161,8 +168,8 @@ def hold(problem: cp.Problem, recording: cp.Recording) -> dict[str, Any]:
         "window_s": Span(*HOLD_S),
         "toml": f"```toml\n{tasks}\n```",
         "spread_cm": 100.0 * float(np.linalg.norm(xyz - mean, axis=1).max()),
-        "recorded": {r["dof"]: r["recorded_mean_deg"] for r in postures},
-        "predicted": {r["dof"]: r["predicted_mean_deg"] for r in postures},
+        "recorded": {r["dof"]: Angle(r["recorded_mean_deg"]) for r in postures},
+        "predicted": {r["dof"]: Angle(r["predicted_mean_deg"]) for r in postures},
         "endurance_min": {k: endurance[k] for k in ("recorded", "predicted")},
         "endurance_ratio": endurance["predicted"] / endurance["recorded"],
     }
@@ -195,7 +202,10 @@ def findings(
         "fit": fit,
         "fit_arm_cm": max(fit[row]["largest_cm"] for row in ("joint_centres", "arm_markers")),
         "fit_flagged_s": Span(flagged[0], flagged[-1]) if flagged.size else None,
-        "at_limit": {h["dof"]: h for h in summary["plausibility"]["held_at_limits"]},
+        "at_limit": {
+            h["dof"]: h | {"limit_deg": Angle(h["limit_deg"])}
+            for h in summary["plausibility"]["held_at_limits"]
+        },
         "opensim": opensim(problem, recording),
         "shift": shift(problem, recording),
         "hold": hold(problem, recording),
