@@ -47,11 +47,32 @@ def table(region: Region, session: Session) -> str:
     return "\n".join(lines)
 
 
+def than(low: float, high: float | None = None) -> str:
+    """A difference from the data [%] in words, '42 % less', or a range of them of one
+    sign, '36 to 80 % more'."""
+    high = low if high is None else high
+    word = "more" if low > 0 else "less" if high < 0 else None
+    if word is None:
+        return f"{low:+.0f} to {high:+.0f} %"
+    ends = sorted({f"{abs(low):.0f}", f"{abs(high):.0f}"}, key=float)
+    return f"{' to '.join(ends)} % {word}"
+
+
+def spread(loads: list[int], off: list[float], args: dict[str, str]) -> tuple[float, float]:
+    """The least and largest of ``off`` [%] over the ``loads`` [%MVC] within
+    ``between=LO,HI`` (all without it)."""
+    low, high = (float(x) for x in args.get("between", "0,100").split(","))
+    inside = [value for load, value in zip(loads, off, strict=True) if low <= load <= high]
+    return min(inside), max(inside)
+
+
 def values(region: Region, session: Session) -> dict[str, Any]:
     """``recovery_rate[REGION]`` [1/s] of ``3cc_r`` (Frey-Law 2012), ``sustainable_pct_mvc
     [REGION]``: the load 100·R/(R + F) [%MVC] it holds for ever, and ``minutes[MODEL]
     [REGION][LOAD]``: the static endurance [min] of ``frey_law_avin`` and ``manenica`` in the
-    ``regions=`` at the whole ``loads=`` (comma-separated, %MVC)."""
+    ``regions=`` at the whole ``loads=`` (comma-separated, %MVC); ``than_data[REGION]
+    [LOAD]``: how ``manenica`` differs from ``frey_law_avin`` there, in words ('42 % less'),
+    and ``spread[REGION]`` over those loads (within ``between=LO,HI``; '36 to 80 % more')."""
     known = {p.name: p.value for p in ThreeCompartmentFatigue(REGIONS).parameters()}
     rate = {
         (place, kind): known[f"fatigue.frey_law_2012.{place}.{kind}_rate"]
@@ -60,7 +81,18 @@ def values(region: Region, session: Session) -> dict[str, Any]:
     }
     loads = [int(x) for x in region.args.get("loads", "").split(",") if x]
     places = [x for x in region.args.get("regions", "").split(",") if x]
+    off = {
+        place: [
+            100 * (endurance_s("manenica", x, place) / endurance_s("frey_law_avin", x, place) - 1)
+            for x in loads
+        ]
+        for place in places
+    }
     return {
+        "than_data": {
+            place: dict(zip(loads, map(than, off[place]), strict=True)) for place in places
+        },
+        "spread": {place: than(*spread(loads, off[place], region.args)) for place in places},
         "recovery_rate": {place: rate[place, "recovery"] for place in REGIONS},
         "sustainable_pct_mvc": {
             place: 100
