@@ -95,7 +95,8 @@ def run_facts(line: str, variant: str) -> dict[str, Any]:
     ``at_recoveries`` and ``after_first_recovery_max``; ``pronation_at_limit_from_s`` (the
     first time the right forearm is at a pronation limit [s]) and
     ``lumbar_after_first_recovery_min_deg`` (the lumbar spine's least flexion [deg] from
-    the first recovery on)."""
+    the first recovery on); ``frame``, the timeline by time [s], and ``events``, each event's
+    (time [s], kind, half-joint)."""
     simulation = run(line, variant)
     s, frame = simulation.summary(), simulation.to_frame().set_index("time_s")
     first, lost = s["first_to_fatigue"], s["task"]["lost"]
@@ -140,6 +141,8 @@ def run_facts(line: str, variant: str) -> dict[str, Any]:
             for g in GROUPS
         },
         "fallbacks": s["solver_statistics"]["ik_fallbacks"],
+        "frame": frame,
+        "events": [(e.time_s, e.kind, e.half_joint) for e in simulation.result.events],
         "steps": s["solver_statistics"]["steps"],
     }
 
