@@ -8,6 +8,7 @@ import argparse
 import difflib
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from . import parallel
@@ -71,6 +72,25 @@ def prefetch(paths: list[Path]) -> None:
                 started.add(generator.prefetch)
 
 
+def waits(path: Path) -> bool:
+    """Whether a region of ``path`` is made from the simulations run in the background
+    (its generator has a prefetch)."""
+    return any(GENERATORS[region.name].prefetch is not None for region in find_regions(path))
+
+
+def in_order(paths: list[Path], update: bool) -> Iterator[tuple[int, list[str], list[str]]]:
+    """What :func:`process` finds of each document, in the order of ``paths``; the documents
+    that wait for the background simulations are made last, so that this process makes the
+    others (their console blocks) while the simulations run."""
+    done: dict[int, tuple[int, list[str], list[str]]] = {}
+    shown = 0
+    for index in sorted(range(len(paths)), key=lambda i: waits(paths[i])):
+        done[index] = process(paths[index], update)
+        while shown in done:
+            yield done.pop(shown)
+            shown += 1
+
+
 def main(argv: list[str] | None = None) -> int:
     """Check or update; the exit code is 1 when a region drifted (check) or failed."""
     parser = argparse.ArgumentParser(prog="python -m docs.generate", description=__doc__)
@@ -82,8 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     drifted, failed, count = 0, 0, 0
     try:
         prefetch(paths)
-        for path in paths:
-            regions, drifts, failures = process(path, options.action == "update")
+        for regions, drifts, failures in in_order(paths, options.action == "update"):
             print("\n".join([*drifts, *failures]), end="\n" if drifts or failures else "")
             count, drifted = count + regions, drifted + len(drifts)
             failed += len(failures)
