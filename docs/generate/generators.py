@@ -9,6 +9,7 @@ from typing import Any
 
 from . import (
     arm_figures,
+    comfort_runs,
     compression_sensitivity,
     console,
     design_text,
@@ -17,6 +18,7 @@ from . import (
     low_back,
     low_back_cases,
     paper_arm,
+    plausibility_table,
     population,
     postures,
     python_output,
@@ -25,7 +27,9 @@ from . import (
     scenarios_text,
     schema_tables,
     sensitivity,
+    start_scores,
     strength,
+    strength_history,
     wall,
 )
 from .regions import Region
@@ -74,6 +78,16 @@ GENERATORS: dict[str, Generator] = {
     "simulate": Generator(runs.simulate),
     "solve": Generator(runs.solve),
     "table": Generator(runs.table),
+    "strength-flexors": Generator(strength_history.flexors, prefetch=strength_history.prefetch),
+    "strength-rotators": Generator(strength_history.rotators, prefetch=strength_history.prefetch),
+    "comfort-adjustments": Generator(comfort_runs.adjustments, prefetch=comfort_runs.prefetch),
+    "comfort-free-wall": Generator(comfort_runs.free_wall, prefetch=comfort_runs.prefetch),
+    "comfort-data": Generator(comfort_runs.data),
+    "comfort-wall": Generator(comfort_runs.wall_recoveries, prefetch=wall.prefetch),
+    "plausibility-data": Generator(plausibility_table.thresholds),
+    "plausibility-runs": Generator(plausibility_table.values, prefetch=plausibility_table.prefetch),
+    "start-scores": Generator(start_scores.table),
+    "run-scores": Generator(start_scores.run_scores),
 }
 
 

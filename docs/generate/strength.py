@@ -14,7 +14,7 @@ from .regions import Region
 from .session import Session
 
 #: The ages [years] the page quotes.
-AGES = (25, 30, 40, 50, 52, 60, 62, 75)
+AGES = (25, 30, 40, 50, 52, 60, 62, 70, 75)
 #: The default body, whose Harbo elbow flexion the page quotes: stature [m], mass [kg].
 REFERENCE = tuple(BodySpec.model_fields[k].default for k in ("stature_m", "mass_kg"))
 
@@ -59,13 +59,41 @@ def group_strength(group: str, sex: str, age: float) -> float | dict[int, float]
     return float(model.value)
 
 
+def comfort_ratio(group: str) -> float | None:
+    """The comfort measure's effort scale of ``group``: its ratio to elbow flexion
+    (``strength.comfort_ratio``), the constant strength the group had before its measured
+    one; None for a group the measure scales by its strength."""
+    found = parameters.load("strength").get(f"strength.comfort_ratio.{group}")
+    return None if found is None else found.value
+
+
+def earlier(group: str, sex: str, age: float = 30) -> float:
+    """The group's earlier constant strength [N·m] (:func:`comfort_ratio` × elbow flexion)
+    for de Leva's reference ``sex``."""
+    return comfort_ratio(group) * group_strength("elbow_flexors", sex, age)
+
+
 def strengths(region: Region, session: Session) -> dict[str, Any]:
     """``man[GROUP]`` and ``woman[GROUP]``: the default strength [N·m] of each group of
     ``groups=`` (comma-separated) for de Leva's reference man and woman at 30 y, a curve's
-    by its knots' angles [deg] (``{man[shoulder_flexors][45]:.1f}``); ``man25``: at 25 y."""
+    by its knots' angles [deg] (``{man[shoulder_flexors][45]:.1f}``); ``man25``: at 25 y;
+    ``ratio[GROUP]``: the group's ratio to elbow flexion (``strength.ratio``), and for the
+    groups the comfort measure scales by its own constant, ``comfort[GROUP]`` (that
+    constant's ratio) and ``earlier[man|woman][GROUP]`` (the constant strength [N·m])."""
     groups = region.args["groups"].split(",")
     people = {"man": ("male", 30), "woman": ("female", 30), "man25": ("male", 25)}
+    table = parameters.load("strength")
+    comfort = {g: comfort_ratio(g) for g in groups if comfort_ratio(g) is not None}
     return {
         name: {g: group_strength(g, sex, age) for g in groups}
         for name, (sex, age) in people.items()
+    } | {
+        "ratio": {
+            g: table[f"strength.ratio.{g}"].value for g in groups if f"strength.ratio.{g}" in table
+        },
+        "comfort": comfort,
+        "earlier": {
+            n: {g: earlier(g, sex) for g in comfort}
+            for n, sex in (("man", "male"), ("woman", "female"))
+        },
     }
