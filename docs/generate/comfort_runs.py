@@ -7,14 +7,11 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-import casadi_posture as cp
 from casadi_posture.data import parameters
 
 from . import low_back, parallel, shipped_runs, wall
 from .regions import Region
-from .session import ROOT, Session
+from .session import Session
 
 #: The table's rows: the problem's name in :mod:`shipped_runs` and its label.
 ROWS = {
@@ -85,8 +82,6 @@ KINDS = {
     "trunk leans back": "trunk leaning back",
     "crossed": "forearms crossed",
 }
-#: The paper's recovery height on its −25° line [m] (a quotation: Rodriguez & Boulic 2008).
-PAPER_HEIGHT_M = 1.40
 #: A DOF within this of its neutral angle [deg] has not moved.
 STILL_DEG = 0.5
 
@@ -192,14 +187,4 @@ def wall_recoveries(region: Region, session: Session) -> dict[str, Any]:
     backs = [
         r["along_back_m"] for line in wall.LINES for r in wall.facts(line, "whole")["recoveries"]
     ]
-    problem = cp.load(ROOT / "problems" / f"{wall.LINES['m25']}.toml")
-    wrist = wall.example().wrist_position(problem)
-    straight = np.array(problem.posture, dtype=float)
-    straight[problem.body.index["elbow_flexion_r"]] = 0.0
-    return {
-        "back_min": min(backs),
-        "back_max": max(backs),
-        "reach_m": float(wrist(straight)[1]),
-        "paper_height_m": PAPER_HEIGHT_M,
-        "above_dot_m": PAPER_HEIGHT_M - float(wrist(problem.posture)[0]),
-    }
+    return wall.reach() | {"back_min": min(backs), "back_max": max(backs)}

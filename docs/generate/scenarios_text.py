@@ -23,8 +23,6 @@ from . import arm_figures, paper_arm, parallel, wall
 from .regions import Region
 from .session import ROOT, Session
 
-#: The paper's recovery height on its −25° line (Fig. 12) [m], a quotation.
-PAPER_HEIGHT_M = 1.40
 #: How far down the −45° line from the dot the shoulder flexors are solved for [m].
 DOWN_M = (0.05, 0.10)
 #: The wrist's target task of the wall files (``tasks[4]``).
@@ -239,14 +237,11 @@ def reach() -> dict[str, Any]:
     ``down``: the shoulder flexors' load [%MVC] and strength [N·m] at the dot and
     :data:`DOWN_M` down the line, and the ``down_command`` of the last."""
     m25 = wall_file("m25")
-    wrist = wall.example().wrist_position(m25)
-    straight = np.array(m25.posture, dtype=float)
-    straight[m25.body.index["elbow_flexion_r"]] = 0.0
-    height, distance = (float(v) for v in wrist(m25.posture))
+    arm = wall.reach()
     task = m25.data["tasks"][TARGET_TASK - 1]
-    up = (PAPER_HEIGHT_M - task["point_m"][2]) / math.sin(-math.radians(task["elevation_deg"]))
+    up = (wall.PAPER_HEIGHT_M - task["point_m"][2]) / math.sin(-math.radians(task["elevation_deg"]))
     target = along_line(m25, -up)
-    target[2] = PAPER_HEIGHT_M
+    target[2] = wall.PAPER_HEIGHT_M
     target = [float(f"{v:.3g}") for v in target]
     answer = cp.solve(wall_file("m25", {f"tasks[{TARGET_TASK}].target_m": target}), "lexicographic")
     reached = np.array(landmark(m25, "wrist_r")(answer.torques.q)).ravel()
@@ -258,13 +253,8 @@ def reach() -> dict[str, Any]:
     for d in DOWN_M:
         keys = {f"tasks[{TARGET_TASK}].target_m": along_line(m45, d)}
         down[d] = cp.solve(wall_file("m45", keys)).to_frame().set_index("name").loc[SHOULDER]
-    return {
+    return arm | {
         "stature_m": m25.data["body"]["stature_m"],
-        "reach_m": float(wrist(straight)[1]),
-        "dot_height_m": height,
-        "dot_distance_m": distance,
-        "paper_height_m": PAPER_HEIGHT_M,
-        "above_dot_m": PAPER_HEIGHT_M - height,
         "up_line_m": up,
         "behind_m": shoulder[0] - target[0],
         "up_command": f"casadi-posture solve problems/{wall.LINES['m25']}.toml --solver "
@@ -273,7 +263,9 @@ def reach() -> dict[str, Any]:
         "at_limits": at_limit(m25, posture, "elbow_flexion_r", "the elbow")
         + ", "
         + at_limit(m25, posture, "lumbar_flexion", "the lumbar spine"),
-        "recovery_above_m": lines["m25"]["whole"]["recoveries"][0]["height_m"] - height,
+        "recovery_above_m": (
+            lines["m25"]["whole"]["recoveries"][0]["height_m"] - arm["dot_height_m"]
+        ),
         "down_m": {i: d for i, d in enumerate(DOWN_M)},
         "down": {i: dict(down[d]) for i, d in enumerate((0.0, *DOWN_M))},
         "down_command": f"casadi-posture solve problems/{wall.LINES['m45']}.toml --set "

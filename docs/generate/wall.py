@@ -266,3 +266,26 @@ def every_line() -> dict[str, Any]:
         "runs": len(LINES) * len(VARIANTS),
     }
     return found
+
+
+#: The paper's recovery height on its −25° line (Fig. 12) [m], a quotation.
+PAPER_HEIGHT_M = 1.40
+
+
+def reach() -> dict[str, Any]:
+    """The right arm on the −25° file beside the paper's protocol: ``reach_m``, the
+    wrist's distance from the shoulder with the elbow straight, the dot's ``dot_height_m``
+    and ``dot_distance_m`` (the wrist at the start), and how far the paper's
+    ``paper_height_m`` lies ``above_dot_m`` [m]."""
+    problem = cp.load(ROOT / "problems" / f"{LINES['m25']}.toml")
+    wrist = example().wrist_position(problem)
+    straight = [float(v) for v in problem.posture]
+    straight[problem.body.index["elbow_flexion_r"]] = 0.0
+    height, distance = (float(v) for v in wrist(problem.posture))
+    return {
+        "reach_m": float(wrist(straight)[1]),
+        "dot_height_m": height,
+        "dot_distance_m": distance,
+        "paper_height_m": PAPER_HEIGHT_M,
+        "above_dot_m": PAPER_HEIGHT_M - height,
+    }
