@@ -96,4 +96,71 @@ def strengths(region: Region, session: Session) -> dict[str, Any]:
             n: {g: earlier(g, sex) for g in comfort}
             for n, sex in (("man", "male"), ("woman", "female"))
         },
+        "reading": readings(),
     }
+
+
+#: Published values the Reading column sets ours beside (quotations): the rotator study's
+#: men and women (age [y], stature [m], mass [kg]), Harbo's isokinetic elbow extension of
+#: the reference man [N·m], the one ulnar-deviation measurement [N·m] and Rantanen's
+#: women's lumbar extension with the axis at the posterior iliac spines [N·m].
+ROTATOR_STUDY = {"male": (22, 1.785, 85.4), "female": (21, 1.685, 70.1)}
+HARBO_ISOKINETIC_EXTENSION_NM = 45.1
+ULNAR_MEASURED_NM = 9.5
+RANTANEN_WOMEN_NM = 182.0
+#: The published isokinetic elbow extension : flexion ratios (Lategan & Krüger; Harbo).
+EXTENSION_RATIOS = (0.84, 0.90)
+
+
+def readings() -> dict[str, Any]:
+    """The figures the Reading column derives from our strengths: ``ext_flex`` (extensors
+    over flexors at 0° and 90° of flexion), ``harbo_study`` (the rotator study's men's
+    Harbo elbow flexion [N·m]), ``study_woman`` (internal and external rotators of a woman
+    of that study's size [N·m]), ``int_ext`` and ``int_ext_earlier`` (internal over
+    external rotators, now and before), ``women_ext_pct`` (women's external rotators over
+    men's [%]), ``elbow_ext_range`` (the extensors at :data:`EXTENSION_RATIOS` × elbow
+    flexion [N·m] by sex), ``isokinetic_above_pct``, ``ulnar_above_pct``,
+    ``pron_men_women`` and ``lumbar_under_pct`` (ours against the quoted values [%])."""
+    man = {g: group_strength(g, "male", 30) for g in GROUPS}
+    woman = {g: group_strength(g, "female", 30) for g in GROUPS}
+    flexors = man["shoulder_flexors"]
+    table = parameters.load("strength")
+    rotators = ("shoulder_internal_rotators", "shoulder_external_rotators")
+    ratio = [table[f"strength.ratio.{g}"].value for g in rotators]
+    woman_study = elbow_flexion("female", *_size(ROTATOR_STUDY["female"]))[0]
+    return {
+        "ext_flex": {a: man["shoulder_extensors"] / flexors[a] for a in (0, 90)},
+        "harbo_study": elbow_flexion("male", *_size(ROTATOR_STUDY["male"]))[0],
+        "study_woman": [r * woman_study for r in ratio],
+        "int_ext": man[rotators[0]] / man[rotators[1]],
+        "int_ext_earlier": earlier(rotators[0], "male") / earlier(rotators[1], "male"),
+        "women_ext_pct": 100 * woman[rotators[1]] / man[rotators[1]],
+        "elbow_ext_range": {
+            who: [r * by["elbow_flexors"] for r in EXTENSION_RATIOS]
+            for who, by in (("man", man), ("woman", woman))
+        },
+        "isokinetic_above_pct": 100 * (HARBO_ISOKINETIC_EXTENSION_NM / man["elbow_extensors"] - 1),
+        "ulnar_above_pct": 100 * (man["wrist_ulnar_deviators"] / ULNAR_MEASURED_NM - 1),
+        "pron_men_women": man["forearm_pronators"] / woman["forearm_pronators"],
+        "lumbar_under_pct": 100 * (1 - woman["lumbar_extensors"] / RANTANEN_WOMEN_NM),
+    }
+
+
+#: The groups :func:`readings` compares.
+GROUPS = (
+    "shoulder_flexors",
+    "shoulder_extensors",
+    "shoulder_internal_rotators",
+    "shoulder_external_rotators",
+    "elbow_flexors",
+    "elbow_extensors",
+    "wrist_ulnar_deviators",
+    "forearm_pronators",
+    "lumbar_extensors",
+)
+
+
+def _size(person: tuple[float, float, float]) -> tuple[float, float, float]:
+    """(age, stature, mass) → the (stature, mass, age) :func:`elbow_flexion` takes."""
+    age, stature, mass = person
+    return stature, mass, age
