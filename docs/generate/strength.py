@@ -6,12 +6,19 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from casadi_posture.biomech.strength import age_factor, default_strength, elbow_flexion
+import casadi_posture as cp
+from casadi_posture.biomech.strength import (
+    age_factor,
+    anderson_young,
+    default_strength,
+    elbow_flexion,
+    known_groups,
+)
 from casadi_posture.data import parameters
 from casadi_posture.spec.schema import BodySpec
 
 from .regions import Region
-from .session import Session
+from .session import ROOT, Session
 
 #: The ages [years] the page quotes.
 AGES = (25, 30, 40, 50, 52, 60, 62, 70, 75)
@@ -36,6 +43,41 @@ def values(region: Region, session: Session) -> dict[str, Any]:
         "loss_male_pct": 100 * (factor["male"][52] - factor["male"][62]),
         "loss_female_pct": 100 * (factor["female"][40] - factor["female"][50]),
         "elbow_pct": 100 * elbow["male"][50] / elbow["male"][30],
+        "knee_female": {
+            row: _anderson("knee_extensors", "female", row) for row in ("young", "older")
+        },
+    } | spread()
+
+
+#: How the page names a sex's groups.
+WHOSE = {"male": "men's", "female": "women's"}
+
+
+def _anderson(group: str, sex: str, row: str) -> tuple[float, float]:
+    """Anderson 2007's ``c1`` and its SD for ``group``, ``sex`` and age ``row``."""
+    table = parameters.load("strength")
+    prefix = f"strength.anderson_2007.{group}.{sex}.{row}"
+    return table[f"{prefix}.c1"].value, table[f"{prefix}.c1_sd"].value
+
+
+def spread() -> dict[str, Any]:
+    """``cv_low`` and ``cv_high``: the least and greatest pooled CV of a group with
+    Anderson's data, each with ``who`` (the sex's group, as the page names it);
+    ``cv_older``, the least and greatest CV of his older rows; ``cv_estimate``, the CV of
+    every other group (``strength.population_cv``)."""
+    groups = [g for g in known_groups() if anderson_young(g, "male") is not None]
+    pooled = [
+        (anderson_young(g, sex)[1], f"{WHOSE[sex]} {g.replace('_', ' ')}")
+        for g in groups
+        for sex in WHOSE
+    ]
+    older = [sd / c1 for g in groups for sex in WHOSE for c1, sd in [_anderson(g, sex, "older")]]
+    low, high = min(pooled), max(pooled)
+    return {
+        "cv_low": {"value": low[0], "who": low[1]},
+        "cv_high": {"value": high[0], "who": high[1]},
+        "cv_older": (min(older), max(older)),
+        "cv_estimate": parameters.value("strength", "population_cv"),
     }
 
 
@@ -120,7 +162,8 @@ def readings() -> dict[str, Any]:
     external rotators, now and before), ``women_ext_pct`` (women's external rotators over
     men's [%]), ``elbow_ext_range`` (the extensors at :data:`EXTENSION_RATIOS` × elbow
     flexion [N·m] by sex), ``isokinetic_above_pct``, ``ulnar_above_pct``,
-    ``pron_men_women`` and ``lumbar_under_pct`` (ours against the quoted values [%])."""
+    ``pron_men_women`` and ``lumbar_under_pct`` (ours against the quoted values [%]) and
+    ``arm_horizontal_pct``: :func:`arm_horizontal_torque` over the flexors at 90° [%]."""
     man = {g: group_strength(g, "male", 30) for g in GROUPS}
     woman = {g: group_strength(g, "female", 30) for g in GROUPS}
     flexors = man["shoulder_flexors"]
@@ -143,7 +186,18 @@ def readings() -> dict[str, Any]:
         "ulnar_above_pct": 100 * (man["wrist_ulnar_deviators"] / ULNAR_MEASURED_NM - 1),
         "pron_men_women": man["forearm_pronators"] / woman["forearm_pronators"],
         "lumbar_under_pct": 100 * (1 - woman["lumbar_extensors"] / RANTANEN_WOMEN_NM),
+        "arm_horizontal_pct": 100 * arm_horizontal_torque() / flexors[90],
     }
+
+
+def arm_horizontal_torque() -> float:
+    """The shoulder flexors' torque [N·m] holding the reference man's unloaded right arm
+    straight out in front (the standing body, every other DOF at 0°)."""
+    path = ROOT / "problems" / "standing_wall_horizontal.toml"
+    problem = cp.load(path, {"loads[0].mass_kg": 0.0})
+    posture = dict.fromkeys(problem.body.index, 0.0) | {"shoulder_flexion_r": 90.0}
+    groups = cp.torques(problem, posture_deg=posture).to_frame().set_index("name")
+    return float(groups.loc["shoulder_flexors_r", "torque_Nm"])
 
 
 #: The groups :func:`readings` compares.
